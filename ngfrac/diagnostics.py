@@ -1,0 +1,49 @@
+"""Per-step diagnostics: energies, crack length and tip, mesh statistics."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ngsolve as ngs
+
+
+@dataclass(frozen=True)
+class Energies:
+    """Energies of a state (no body force, so E_total = E_el + E_surf)."""
+
+    E_el: float
+    E_surf: float
+    crack_length: float
+
+    @property
+    def E_total(self) -> float:
+        return self.E_el + self.E_surf
+
+
+def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.CoefficientFunction,
+             gamma: ngs.CoefficientFunction, epsilon: float, residual_stiffness: float) -> Energies:
+    """Integrate the three energies in one pass.
+
+    ``E_el = 1/2 int ((1-z)^2 + eta) sigma:e``, ``E_surf = 1/2 int gamma (eps|grad z|^2 + z^2/eps)``,
+    ``crack_length = 1/2 int (eps|grad z|^2 + z^2/eps)`` (the Gamma-limit of the surface term).
+    """
+    surface = 0.5 * (epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)) + z * z / epsilon)
+    elastic = 0.5 * ((1 - z) ** 2 + residual_stiffness) * energy_density
+    values = ngs.Integrate(ngs.CoefficientFunction((elastic, gamma * surface, surface)), mesh)
+    return Energies(float(values[0]), float(values[1]), float(values[2]))
+
+
+def element_sizes(mesh: ngs.Mesh) -> np.ndarray:
+    """Longest edge of each volume element."""
+    coords = np.array(mesh.ngmesh.Coordinates())
+    if mesh.dim == 2:
+        nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"]
+    else:
+        nodes = mesh.ngmesh.Elements3D().NumPy()["nodes"]
+    nodes = nodes[:, : mesh.dim + 1].astype(int) - 1  # netgen numbers points from 1
+    corners = coords[nodes]
+    longest = np.zeros(len(nodes))
+    for i in range(mesh.dim + 1):
+        for j in range(i + 1, mesh.dim + 1):
+            np.maximum(longest, np.linalg.norm(corners[:, i] - corners[:, j], axis=1), out=longest)
+    return longest

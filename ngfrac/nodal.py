@@ -1,0 +1,86 @@
+"""Lagrange-node values of P1/P2 fields in NGSolve's hierarchical H1 basis.
+
+NGSolve's H1 space of order 2 stores vertex values and, per edge, the coefficient c_e of a
+quadratic edge bubble. The value at the edge midpoint is ``(u_a + u_b)/2 + beta c_e`` with a
+fixed ``beta`` (-1/8 in 6.2.2608; measured here, not assumed). Pointwise operations such as
+the bounds ``0 <= z <= 1`` and the non-repair condition ``z >= z_old`` must act on these node
+values, not on the hierarchical coefficients; this module converts between the two.
+"""
+from __future__ import annotations
+
+import numpy as np
+import ngsolve as ngs
+
+
+class LagrangeNodes:
+    """Node coordinates and value conversion for an order 1 or 2 ``H1`` space.
+
+    Parameters
+    ----------
+    fes : ngsolve.H1
+        A scalar H1 space of order 1 or 2 (2D or 3D).
+    """
+
+    def __init__(self, fes: ngs.FESpace) -> None:
+        order = fes.globalorder
+        if order not in (1, 2):
+            raise ValueError(f"LagrangeNodes supports H1 of order 1 or 2, got order {order}")
+        mesh = fes.mesh
+        self.fes = fes
+        self.order = order
+        vertices = np.array(mesh.ngmesh.Coordinates())[:, : mesh.dim]
+        nv = mesh.nv
+        if order == 1:
+            self.edge_vertices = np.zeros((0, 2), dtype=int)
+            self.points = vertices
+            self.beta = 1.0
+            self._edge_dofs = np.zeros(0, dtype=int)
+        else:
+            pairs = np.array([(e.vertices[0].nr, e.vertices[1].nr) for e in mesh.edges], dtype=int)
+            self.edge_vertices = pairs
+            # Edge dofs follow the vertex dofs in edge order for a uniform order-2 space.
+            self._edge_dofs = nv + np.arange(len(pairs))
+            first = fes.GetDofNrs(ngs.NodeId(ngs.EDGE, 0))
+            if fes.ndof != nv + len(pairs) or tuple(first) != (nv,):
+                raise RuntimeError("unexpected dof layout of the order-2 H1 space")
+            self.points = np.vstack([vertices, 0.5 * (vertices[pairs[:, 0]] + vertices[pairs[:, 1]])])
+            self.beta = self._midpoint_bubble_value(fes, vertices, pairs)
+        self.nv = nv
+
+    @staticmethod
+    def _midpoint_bubble_value(fes: ngs.FESpace, vertices: np.ndarray, pairs: np.ndarray) -> float:
+        gf = ngs.GridFunction(fes)
+        gf.vec[:] = 0
+        gf.vec[int(fes.mesh.nv)] = 1.0
+        mid = 0.5 * (vertices[pairs[0, 0]] + vertices[pairs[0, 1]])
+        beta = float(gf(fes.mesh(*mid)))
+        if abs(beta) < 1e-12:
+            raise RuntimeError("edge bubble vanishes at the midpoint; unexpected basis")
+        return beta
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.points)
+
+    def values(self, gf: ngs.GridFunction) -> np.ndarray:
+        """Node values (vertices first, then edge midpoints) of a GridFunction."""
+        coeffs = gf.vec.FV().NumPy()
+        if self.order == 1:
+            return coeffs.copy()
+        vert = coeffs[: self.nv]
+        mean = 0.5 * (vert[self.edge_vertices[:, 0]] + vert[self.edge_vertices[:, 1]])
+        return np.concatenate([vert, mean + self.beta * coeffs[self._edge_dofs]])
+
+    def assign(self, gf: ngs.GridFunction, node_values: np.ndarray) -> None:
+        """Set a GridFunction so that it takes the given node values."""
+        coeffs = gf.vec.FV().NumPy()
+        node_values = np.asarray(node_values, dtype=float)
+        if node_values.shape != (self.n_nodes,):
+            raise ValueError(f"expected {self.n_nodes} node values, got {node_values.shape}")
+        if self.order == 1:
+            coeffs[:] = node_values
+            return
+        vert = node_values[: self.nv]
+        coeffs[: self.nv] = vert
+        mean = 0.5 * (vert[self.edge_vertices[:, 0]] + vert[self.edge_vertices[:, 1]])
+        coeffs[self._edge_dofs] = (node_values[self.nv:] - mean) / self.beta

@@ -1,0 +1,275 @@
+"""The time stepper: the paper's semi-implicit staggered scheme (its eq. 7).
+
+Step k (time t_k = k dt)::
+
+    alpha1 (u^k - u^{k-1})/dt = div(((1 - z^{k-1})^2 + eta) sigma[u^k])       u = g(t_k) on Gamma_D
+    alpha2 (zt - z^{k-1})/dt  = eps div(gamma grad zt) - gamma zt/eps + W (1 - zt)
+    z^k = min(1, max(zt, z^{k-1}))        at the Lagrange nodes of z
+
+with ``W = sigma[u^{k-1}]:e[u^{k-1}]`` (``coupling = "paper"``) or ``sigma[u^k]:e[u^k]``
+(``coupling = "staggered"``). Both sub-steps are linear; forms are built once per mesh and
+only reassembled, and the u-factorization is reused with a numeric update.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, fields
+from typing import Iterator
+
+import numpy as np
+import ngsolve as ngs
+from ngsolve.krylovspace import CGSolver
+
+from .cracks import crack_tip, distance_to_polylines, optimal_profile
+from .diagnostics import element_sizes, energies
+from .geometry import build_mesh
+from .models import make_model
+from .nodal import LagrangeNodes
+from .scene import Scene
+
+log = logging.getLogger(__name__)
+
+
+class SolverError(RuntimeError):
+    """A linear solve failed or produced non-finite values."""
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """What one step reports. Diagnostic fields are NaN on steps that skip diagnostics."""
+
+    step: int
+    t: float
+    wall_s: float
+    nv: int
+    ndof: int
+    hmin: float = math.nan
+    hmax: float = math.nan
+    E_el: float = math.nan
+    E_surf: float = math.nan
+    E_total: float = math.nan
+    crack_length: float = math.nan
+    tip_x: float = math.nan
+    tip_y: float = math.nan
+    dz_max: float = math.nan
+    z_iterations: int = 0
+
+    @property
+    def has_diagnostics(self) -> bool:
+        return not math.isnan(self.E_total)
+
+    @classmethod
+    def columns(cls) -> list[str]:
+        return [f.name for f in fields(cls)]
+
+    def row(self) -> list[float | int]:
+        return [getattr(self, name) for name in self.columns()]
+
+
+class PhaseFieldStepper:
+    """Owns mesh, spaces, forms and state of one run.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated run description.
+    mesh : ngsolve.Mesh, optional
+        A mesh to use instead of the uniform mesh the scene describes.
+
+    Examples
+    --------
+    >>> stepper = PhaseFieldStepper(load_scene("demos/mode3_slit.toml"))  # doctest: +SKIP
+    >>> for record in stepper.run():                                        # doctest: +SKIP
+    ...     print(record.t, record.tip_x)
+    """
+
+    def __init__(self, scene: Scene, mesh: ngs.Mesh | None = None) -> None:
+        self.scene = scene
+        self.model = make_model(scene)
+        self.k = 0
+        self.time = ngs.Parameter(0.0)
+        self._started = time.perf_counter()
+        self._polylines = [crack.points for crack in scene.cracks]
+        gamma = scene.material.gamma
+        # A constant toughness stays a number: no coefficient evaluation in the forms.
+        self.gamma = gamma.value() if gamma.is_constant else gamma.to_coefficient()
+        self._setup(mesh if mesh is not None else build_mesh(scene.geometry, scene.mesh_size))
+        self._set_initial_state()
+
+    # -- set-up -----------------------------------------------------------------------------
+    def _setup(self, mesh: ngs.Mesh) -> None:
+        """Spaces, GridFunctions and forms on ``mesh`` (called again after a mesh change)."""
+        sc = self.scene
+        pf, disc = sc.phase_field, sc.discretization
+        self.mesh = mesh
+        dirichlet = "|".join(load.boundary for load in sc.loads)
+        self.fes_u = self.model.space(mesh, disc.order, dirichlet)
+        self.fes_z = ngs.H1(mesh, order=disc.z_order)
+        self.nodes = LagrangeNodes(self.fes_z)
+        self.u = ngs.GridFunction(self.fes_u, "u")
+        self.u_prev = ngs.GridFunction(self.fes_u, "u_prev")
+        self.z = ngs.GridFunction(self.fes_z, "z")
+        self.z_trial = ngs.GridFunction(self.fes_z, "z_trial")
+        self.u_boundary = ngs.GridFunction(self.fes_u, "u_boundary")
+        self._boundary_cf = self.model.boundary_values(mesh, sc.loads, self.time)
+        self._sizes: np.ndarray | None = None
+
+        dt = sc.time.dt
+        u, v = self.fes_u.TnT()
+        stiffness = ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v)
+        if pf.alpha1 > 0:
+            stiffness = stiffness + pf.alpha1 / dt * u * v
+        self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
+        self.a_u += stiffness * ngs.dx
+        self.m_u = None
+        if pf.alpha1 > 0:
+            self.m_u = ngs.BilinearForm(pf.alpha1 / dt * u * v * ngs.dx, symmetric=True).Assemble()
+        self._inv_u = None
+
+        drive = self.u_prev if disc.coupling == "paper" else self.u
+        self._drive = self.model.energy_density(drive)
+        zt, w = self.fes_z.TnT()
+        gamma, eps = self.gamma, pf.epsilon
+        self.a_z = ngs.BilinearForm(self.fes_z, symmetric=True)
+        self.a_z += (eps * gamma * ngs.grad(zt) * ngs.grad(w)
+                     + (pf.alpha2 / dt + gamma / eps + self._drive) * zt * w) * ngs.dx
+        self.f_z = ngs.LinearForm((pf.alpha2 / dt * self.z + self._drive) * w * ngs.dx)
+        self._inv_z = None
+
+    def _set_initial_state(self) -> None:
+        """z0 = exp(-dist/eps) at the nodes; u0 solves the elastic problem at t = 0."""
+        if self._polylines:
+            distance = distance_to_polylines(self.nodes.points, self._polylines)
+            self.nodes.assign(self.z, optimal_profile(distance, self.scene.phase_field.epsilon))
+        else:
+            self.z.vec[:] = 0.0
+        self.time.Set(0.0)
+        self.u.vec[:] = 0.0
+        self._apply_boundary_values()
+        pf = self.scene.phase_field
+        u, v = self.fes_u.TnT()
+        static = ngs.BilinearForm(self.fes_u, symmetric=True)
+        static += ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v) * ngs.dx
+        with ngs.TaskManager():
+            static.Assemble()
+            inverse = static.mat.Inverse(self.fes_u.FreeDofs(), inverse=self.scene.discretization.u_solver)
+            residual = (-static.mat * self.u.vec).Evaluate()
+            self.u.vec.data += inverse * residual
+        self.u_prev.vec.data = self.u.vec
+
+    # -- one step ---------------------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        """Current time t_k = k dt."""
+        return self.k * self.scene.time.dt
+
+    @property
+    def n_steps(self) -> int:
+        return self.scene.time.n_steps
+
+    def _apply_boundary_values(self) -> None:
+        self.u_boundary.Set(self._boundary_cf, ngs.BND)
+        free = np.array(self.fes_u.FreeDofs(), dtype=bool)
+        self.u.vec.FV().NumPy()[~free] = self.u_boundary.vec.FV().NumPy()[~free]
+
+    def _solve_u(self) -> None:
+        """The u-sub-step with z^{k-1} frozen (z holds z^{k-1} when this runs)."""
+        self.a_u.Assemble()
+        if self._inv_u is None:
+            self._inv_u = self.a_u.mat.Inverse(self.fes_u.FreeDofs(),
+                                               inverse=self.scene.discretization.u_solver)
+        else:
+            self._inv_u.Update()
+        self._apply_boundary_values()
+        residual = self.u.vec.CreateVector()
+        if self.m_u is not None:
+            residual.data = self.m_u.mat * self.u_prev.vec - self.a_u.mat * self.u.vec
+        else:
+            residual.data = -self.a_u.mat * self.u.vec
+        self.u.vec.data += self._inv_u * residual
+        if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
+            raise SolverError(f"the u-solve gave non-finite values at step {self.k} (t={self.t:g}); "
+                              "raise phase_field.residual_stiffness or lower time.dt")
+
+    def _solve_z(self) -> int:
+        """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
+        self.a_z.Assemble()
+        self.f_z.Assemble()
+        solver = self.scene.discretization.z_solver
+        iterations = 0
+        if solver == "cg":
+            self.z_trial.vec.data = self.z.vec  # z^{k-1} is a good initial guess
+            cg = CGSolver(self.a_z.mat, self.a_z.mat.CreateSmoother(self.fes_z.FreeDofs()),
+                          tol=1e-10, maxiter=2000)
+            cg.Solve(rhs=self.f_z.vec, sol=self.z_trial.vec, initialize=False)
+            iterations = cg.iterations
+            if iterations >= 2000:
+                raise SolverError(f"the z-solve (CG) did not converge at step {self.k} (t={self.t:g}); "
+                                  "set discretization.z_solver = 'sparsecholesky'")
+        else:
+            if self._inv_z is None:
+                self._inv_z = self.a_z.mat.Inverse(self.fes_z.FreeDofs(), inverse=solver)
+            else:
+                self._inv_z.Update()
+            self.z_trial.vec.data = self._inv_z * self.f_z.vec
+        if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
+            raise SolverError(f"the z-solve gave non-finite values at step {self.k} (t={self.t:g}); "
+                              "lower time.dt")
+        return iterations
+
+    def step(self, diagnose: bool = True) -> StepRecord:
+        """Advance one time step.
+
+        Parameters
+        ----------
+        diagnose : bool
+            Compute energies, crack length and tip (costs integrals); else those are NaN.
+        """
+        self.k += 1
+        self.time.Set(self.t)
+        with ngs.TaskManager():
+            self.u_prev.vec.data = self.u.vec
+            self._solve_u()
+            iterations = self._solve_z()
+            old = self.nodes.values(self.z)
+            trial = self.nodes.values(self.z_trial)
+            new = np.minimum(1.0, np.maximum(trial, old))
+            self.nodes.assign(self.z, new)
+        dz_max = float(np.max(new - old)) if len(new) else 0.0
+        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations)
+
+    def record(self, diagnose: bool = True, dz_max: float = math.nan, z_iterations: int = 0) -> StepRecord:
+        """A record of the current state (diagnostics only when asked for)."""
+        base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self._started,
+                    nv=self.mesh.nv, ndof=self.fes_u.ndof + self.fes_z.ndof,
+                    dz_max=dz_max, z_iterations=z_iterations)
+        if not diagnose:
+            return StepRecord(**base)
+        pf = self.scene.phase_field
+        with ngs.TaskManager():
+            e = energies(self.mesh, self.z, self.model.energy_density(self.u), self.gamma,
+                         pf.epsilon, pf.residual_stiffness)
+        if self._sizes is None:
+            self._sizes = element_sizes(self.mesh)
+        band = self.scene.phase_field.epsilon * math.log(2.0) + float(self._sizes.max())
+        tip = crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band)
+        return StepRecord(**base, hmin=float(self._sizes.min()), hmax=float(self._sizes.max()),
+                          E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
+                          crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]))
+
+    def run(self, history_every: int | None = None) -> Iterator[StepRecord]:
+        """Step to the end time, yielding one record per step.
+
+        Diagnostics are computed every ``history_every`` steps (the scene's
+        ``output.history_every`` by default) and at the last step.
+        """
+        every = history_every or self.scene.output.history_every
+        while self.k < self.n_steps:
+            last = self.k + 1 == self.n_steps
+            yield self.step(diagnose=last or (self.k + 1) % every == 0)
+
+    def z_node_values(self) -> np.ndarray:
+        """z at the Lagrange nodes (vertices, then edge midpoints for P2)."""
+        return self.nodes.values(self.z)
