@@ -78,15 +78,19 @@ class Material(_Section):
     """Elastic moduli and fracture toughness.
 
     ``mu`` is the shear modulus (mode III uses only it); ``gamma`` is Griffith's G_c, a
-    number or an expression in x, y.
+    number or an expression in x, y; ``body_force`` is f in ``-div sigma = f``.
     """
 
     SECTION: ClassVar[str] = "material"
     mu: float = 1.0
     gamma: Expression = Expression("1.0")
+    body_force: Expression = Expression("0.0")
+    """Body force f (mode III: out of plane), an expression in x, y, t."""
 
     def validate(self) -> None:
         _require(self.mu > 0, self.SECTION, "mu", self.mu, "the shear modulus must be > 0")
+        if "z" in self.body_force.names:
+            raise SceneError(f"material.body_force = {self.body_force.text!r} uses z, but the domain is 2D")
         if "t" in self.gamma.names:
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
 

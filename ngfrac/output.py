@@ -1,0 +1,150 @@
+"""Run folders: history.csv, VTK snapshots with a .pvd series, the resolved scene.
+
+VTK files are written with NGSolve's ``VTKOutput`` (no GUI), one ``.vtu`` per snapshot, so
+the series stays valid when the mesh changes between snapshots; ``fields.pvd`` is rewritten
+atomically after each snapshot and opens in ParaView as a time series.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+import shutil
+from pathlib import Path
+from typing import Any, Iterable, TextIO
+from xml.sax.saxutils import quoteattr
+
+import ngsolve as ngs
+
+OWNED = ("history.csv", "scene.toml", "vtk", "history.png", "crack.png", "results.h5")
+"""What ngfrac writes into a run folder (and may remove with ``overwrite``)."""
+
+
+class OutputError(RuntimeError):
+    """The output folder cannot be used as asked."""
+
+
+def prepare_output_dir(path: str | Path, overwrite: bool = False) -> Path:
+    """Create the run folder, refusing to mix with an earlier run unless ``overwrite``.
+
+    With ``overwrite`` only the files ngfrac writes are removed; anything else stays.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(f"output path {str(path)!r} exists and is not a folder")
+    previous = [name for name in OWNED if (path / name).exists()]
+    if previous and not overwrite:
+        raise OutputError(f"output folder {str(path)!r} already holds a run ({previous[0]}); "
+                          "choose another --out or pass --overwrite")
+    for name in previous:
+        target = path / name
+        shutil.rmtree(target) if target.is_dir() else target.unlink()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"cannot create output folder {str(path)!r}: {err.strerror}") from None
+    return path
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write a text file via a temporary name and a rename, so readers never see half a file."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+class HistoryWriter:
+    """Appends one CSV row per diagnosed step; flushed each row so a killed run keeps its rows."""
+
+    def __init__(self, path: Path, columns: list[str]) -> None:
+        self.path = path
+        self.columns = columns
+        self._handle: TextIO = path.open("w", newline="")
+        self._writer = csv.writer(self._handle)
+        self._writer.writerow(columns)
+
+    def write(self, row: Iterable[Any]) -> None:
+        self._writer.writerow([_format(v) for v in row])
+        self._handle.flush()
+
+    def close(self) -> None:
+        self._handle.close()
+
+    def __enter__(self) -> "HistoryWriter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _format(value: Any) -> str:
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else repr(value)
+    return str(value)
+
+
+class VTKSeries:
+    """Numbered VTK snapshots in ``folder`` and a ``.pvd`` collection listing them.
+
+    Parameters
+    ----------
+    folder : Path
+        Where ``fields_00000.vtu``, ... and ``fields.pvd`` go.
+    subdivision : int
+        Subdivisions per element (order - 1 shows P2 fields faithfully).
+    """
+
+    def __init__(self, folder: Path, subdivision: int, stem: str = "fields") -> None:
+        self.folder = folder
+        self.subdivision = subdivision
+        self.stem = stem
+        self.entries: list[tuple[float, str]] = []
+        folder.mkdir(parents=True, exist_ok=True)
+
+    def write(self, mesh: ngs.Mesh, fields: dict[str, Any], t: float) -> Path:
+        """Write one snapshot of the named CoefficientFunctions on ``mesh`` at time ``t``."""
+        name = f"{self.stem}_{len(self.entries):05d}"
+        output = ngs.VTKOutput(ma=mesh, coefs=list(fields.values()), names=list(fields),
+                               filename=str(self.folder / name), subdivision=self.subdivision)
+        output.Do()
+        self.entries.append((t, name + ".vtu"))
+        self._write_collection()
+        return self.folder / (name + ".vtu")
+
+    def _write_collection(self) -> None:
+        lines = ['<?xml version="1.0"?>',
+                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+                 "  <Collection>"]
+        for t, file in self.entries:
+            lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(file)}/>')
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        atomic_write_text(self.folder / f"{self.stem}.pvd", "\n".join(lines))
+
+
+def to_toml(data: dict[str, Any]) -> str:
+    """Serialise a scene dictionary (tables, arrays of tables, scalars, lists) as TOML."""
+    scalars = {k: v for k, v in data.items() if not isinstance(v, (dict, list)) or _is_value_list(v)}
+    lines = [f"{k} = {_toml_value(v)}" for k, v in scalars.items()]
+    for key, value in data.items():
+        if isinstance(value, dict):
+            lines += ["", f"[{key}]"] + [f"{k} = {_toml_value(v)}" for k, v in value.items()]
+        elif isinstance(value, list) and not _is_value_list(value):
+            for item in value:
+                lines += ["", f"[[{key}]]"] + [f"{k} = {_toml_value(v)}" for k, v in item.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _is_value_list(value: Any) -> bool:
+    return isinstance(value, list) and not any(isinstance(v, dict) for v in value)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} as TOML")
