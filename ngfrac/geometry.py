@@ -58,8 +58,9 @@ def netgen_geometry(geometry: Geometry,
                 geo.Append(["line", point(p), point(q)], leftdomain=1, rightdomain=0, bc=name)
     for line in cracks:
         for p, q in zip(line[:-1], line[1:]):
-            if _on_boundary(geometry, p, tol) and _on_boundary(geometry, q, tol):
-                continue  # a segment along the boundary is already there
+            middle = (0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]))
+            if _on_boundary(geometry, middle, tol):
+                continue  # in a rectangle only a segment along a side has its middle on the boundary
             geo.Append(["line", point(p), point(q)], leftdomain=1, rightdomain=1, bc=CRACK_BOUNDARY)
     return geo
 

@@ -33,7 +33,8 @@ def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
 
 def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
               on_record: Callable[[StepRecord], None] | None = None,
-              plots: bool = True) -> RunSummary:
+              plots: bool = True,
+              on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
     """Run ``scene`` to its end time, writing history, VTK, the scene copy and plots.
 
     Parameters
@@ -43,6 +44,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     overwrite : replace an earlier run in that folder
     on_record : called with every step record (the CLI's progress bar)
     plots : write history.png and crack.png at the end
+    on_step : called with the stepper after set-up and after every step (for checks in tests)
     """
     out = prepare_output_dir(out_dir, overwrite)
     atomic_write_text(out / "scene.toml", to_toml(scene.to_dict()))
@@ -53,6 +55,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     series = VTKSeries(out / "vtk", subdivision)
     vtk_every = scene.output.vtk_every
     record = stepper.record()
+    if on_step is not None:
+        on_step(stepper)
     with HistoryWriter(out / "history.csv", StepRecord.columns()) as history:
         history.write(record.row())
         if vtk_every:
@@ -65,6 +69,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                 write_snapshot(series, stepper)
             if on_record is not None:
                 on_record(record)
+            if on_step is not None:
+                on_step(stepper)
     if plots:
         plot_history(out / "history.csv", out / "history.png")
         z_vertices = stepper.z_node_values()[: stepper.mesh.nv]

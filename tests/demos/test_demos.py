@@ -1,0 +1,75 @@
+"""Every demo runs in a quick mode and shows one physical fact; z keeps its bounds."""
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ngfrac.plotting import read_history
+
+ROOT = Path(__file__).resolve().parents[2]
+DEMOS = ROOT / "demos"
+QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=50",
+         "time.dt=1e-3"]
+
+
+def load_demo(name):
+    spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+class BoundsChecker:
+    """Checks 0 <= z <= 1 and z^k >= z^{k-1} at every Lagrange node after every step."""
+
+    def __init__(self):
+        self.previous = None
+        self.steps = 0
+
+    def __call__(self, stepper):
+        values = stepper.z_node_values()
+        assert values.min() >= 0.0 and values.max() <= 1.0, (values.min(), values.max())
+        if self.previous is not None:
+            decrease = np.max(self.previous - values)
+            assert decrease <= 0.0, f"z decreased by {decrease} at step {stepper.k}"
+            self.steps += 1
+        self.previous = values
+
+
+def run_quick(name, tmp_path):
+    checker = BoundsChecker()
+    load_demo(name).main(tmp_path / name, QUICK, on_step=checker)
+    assert checker.steps > 50
+    out = tmp_path / name
+    for produced in ("history.csv", "history.png", "crack.png", "scene.toml", "vtk/fields.pvd"):
+        assert (out / produced).exists(), produced
+    return read_history(out / "history.csv")
+
+
+def check_slit(history):
+    # Fig. 2: the crack runs straight across to the right edge.
+    assert np.nanmax(history["tip_x"]) > 0.97, np.nanmax(history["tip_x"])
+    assert np.nanmax(np.abs(history["tip_y"] - 0.5)) < 0.1
+
+
+def check_stripes(history):
+    # Fig. 4: the weak stripes draw the crack off the slit's straight line.
+    assert np.nanmax(history["tip_x"]) > 0.5
+    deviation = np.nanmax(np.abs(history["tip_y"] - 0.5))
+    assert deviation > 0.05, f"tip stayed within {deviation:.3f} of the slit's line"
+
+
+CHECKS = {"mode3_slit": check_slit, "mode3_stripes": check_stripes}
+
+
+def test_every_demo_has_a_test():
+    scenes = {path.stem for path in DEMOS.glob("*.toml")}
+    scripts = {path.stem for path in DEMOS.glob("*.py")}
+    assert scenes == set(CHECKS), f"demos without a physics check: {scenes - set(CHECKS)}"
+    assert scripts == scenes, f"scenes and scripts differ: {scenes ^ scripts}"
+
+
+@pytest.mark.parametrize("name", sorted(CHECKS))
+def test_demo_quick(name, tmp_path):
+    CHECKS[name](run_quick(name, tmp_path))

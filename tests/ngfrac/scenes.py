@@ -1,0 +1,27 @@
+"""Small scenes for tests: the slit demo made coarse and short."""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+from ngfrac.scene import Scene, apply_overrides, read_scene_data
+
+ROOT = Path(__file__).resolve().parents[2]
+DEMOS = ROOT / "demos"
+
+QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0"]
+
+
+def demo_data(name: str = "mode3_slit") -> dict[str, Any]:
+    """Raw TOML data of a demo scene."""
+    return read_scene_data(DEMOS / f"{name}.toml")
+
+
+def scene_from(data: dict[str, Any], *overrides: str) -> Scene:
+    return Scene.from_dict(apply_overrides(copy.deepcopy(data), list(overrides)))
+
+
+def quick_slit(*overrides: str) -> Scene:
+    """The slit demo on a coarse mesh (epsilon 0.04, h 0.02)."""
+    return scene_from(demo_data(), *QUICK, *overrides)

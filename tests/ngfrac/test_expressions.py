@@ -1,0 +1,34 @@
+import numpy as np
+import ngsolve as ngs
+import pytest
+from netgen.geom2d import unit_square
+
+from ngfrac.expressions import Expression, ExpressionError
+
+
+def test_numpy_and_ngsolve_agree():
+    expr = Expression("0.5*(1 + 0.2*sin(20*(x+y))) + exp(-x)*t + max(x, y) - abs(x - y)")
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
+    t = ngs.Parameter(0.7)
+    cf = expr.to_coefficient(t)
+    for px, py in [(0.1, 0.2), (0.5, 0.9), (0.8, 0.3)]:
+        expected = expr.evaluate_numpy({"x": px, "y": py, "t": 0.7})
+        assert cf(mesh(px, py)) == pytest.approx(float(expected), rel=1e-12)
+
+
+def test_constant_expression():
+    expr = Expression.of(2.5)
+    assert expr.is_constant and expr.value() == 2.5
+
+
+@pytest.mark.parametrize("text", ["__import__('os')", "x.real", "[1, 2]", "lambda: 1", "x if y else t",
+                                  "'a'", "sin(x, y)"])
+def test_rejects_everything_outside_the_grammar(text):
+    with pytest.raises(ExpressionError):
+        Expression(text)
+
+
+def test_time_needed():
+    with pytest.raises(ExpressionError, match="uses t"):
+        Expression("10*t").to_coefficient()
+    assert np.isclose(Expression("10*t").evaluate_numpy({"t": 0.5}), 5.0)
