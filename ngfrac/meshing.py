@@ -6,38 +6,41 @@ Netgen's local mesh size (``MeshingParameters.RestrictH``), and Netgen meshes fr
 Refinement and coarsening are then the same operation, and the old mesh only serves to carry
 the field (one size per element) and the solution for :mod:`ngfrac.transfer`.
 
-Pipeline (:func:`adapt_mesh` runs it)::
+Pipeline (the caller makes h_T, :func:`adapt_mesh` does the rest)::
 
     eta_T --size_field_from_indicator--> h_T --enforce_crack_sizes--> h_T <= h_tip, h_crack
-        --grade_sizes--> |grad h| <= g --sample_size_field--> (points, h, weights)
-        --remesh (cap_vertices inside)--> new mesh with nv <= max_vertices
+        --grade_sizes--> |grad h| <= 0.3 --cap_vertices--> predicted nv <= 0.95 cap
+        --sample_size_field--> (points, h, weights) --remesh--> new mesh, nv <= cap (checked)
 
-Measured with ngsolve/netgen 6.2.2608 on this machine (2 cores; ``tests/ngfrac/
-test_meshing.py::test_benchmark_numbers`` with ``--runslow`` prints them again):
+Measured with ngsolve/netgen 6.2.2608 on a shared 2-core machine (``pytest --runslow -s -k
+benchmark tests/ngfrac/test_meshing.py`` prints the numbers again):
 
-* ``RestrictH`` costs ~3 us per point (20,000 points: 0.06 s); the meshing itself dominates:
-  ~0.12 ms per generated vertex, e.g. 0.6 s for a graded crack mesh of ~5,000 vertices,
-  1.1 s for a uniform mesh of 11,800 vertices, 6.3 s for 46,600.
+* Time: Netgen's meshing dominates (``RestrictH`` is ~0.3-3 us per point): a crack mesh of
+  ~5,000 vertices takes ~0.5 s (3,300: 0.3 s; 6,600: 0.7 s; 11,800: 0.85 s), with
+  ``optsteps2d=1``, which halves the default's time at nearly equal quality (smallest angle
+  29.7 deg, 5th percentile 43.5 deg, against 29.6 and 44.0 deg). Uniform meshes for reference:
+  11,800 vertices 1.1 s, 46,600 vertices 6.3 s (default optimisation).
 * Netgen realises a *graded* size field ~1.2-1.45x coarser than requested (longest edge over
   requested h, median), although a uniform ``maxh`` is met exactly (median 1.00) and
-  ``GetLocalH`` reports the requested values; so sizes go to Netgen divided by
-  :data:`SIZE_RATIO` = 1.3, after which the median ratio is ~1.0-1.1 and the 95th
-  percentile ~1.45.
-* Sampling: one point per element where the old element is already small enough, else a
-  barycentric lattice with spacing ~h; denser sampling changes the mesh by < 5 %.
-* Vertex count: ``nv ~ c * int h^-2 dx`` with c = :data:`VERTEX_DENSITY` = 1.15 for the
-  requested h (2/sqrt(3) = 1.155 is the equilateral value); measured 1.0-1.3 over crack-like
-  fields with 1,000-20,000 vertices. :func:`remesh` re-measures c on every attempt, so the cap
-  holds whatever the constant.
+  ``GetLocalH`` reports the requested values. Sizes below hmax therefore go to Netgen divided
+  by :data:`SIZE_RATIO` = 1.3; then the median ratio is ~0.95 on a constant band and ~1.2 on
+  the graded flanks, 95th percentile < 1.6.
+* Sampling: a point per element, or a lattice with spacing ~h where the carrying element is
+  coarser than the requested h; sampling 2x denser changes the vertex count by < 3 %.
+* Vertex count: ``nv ~ c * int h^-2 dx`` over the *graded* requested field, c =
+  :data:`VERTEX_DENSITY` = 1.45; measured 1.20 (smooth fields) to 1.58 (a small fine disc),
+  1.32-1.36 for capped fields (2/sqrt(3) = 1.155 would be equilateral triangles of size h).
+  :func:`remesh` re-measures c whenever a mesh exceeds the cap and regenerates, so the cap
+  holds whatever the constant; with c = 1.45 one attempt is the rule.
 
 Alternative measured: rebuild from the base mesh (uniform hmax) by repeated marked bisection
-(``SetRefinementFlags`` + ``Refine`` until every longest edge <= 1.5 h): 4-5x faster (0.03 /
-0.06 / 0.09 s for hmin = 0.005 / 0.0025 / 0.00125 on the unit square against 0.11 / 0.24 /
-0.42 s), but 2.5-2.9x more vertices for the same field (2,338 / 4,595 / 9,044 against
-923 / 1,638 / 3,155) and worse angles (5th percentile of the smallest angle 31 deg against
-41 deg; largest angle 119 deg against 102-109 deg). Under a vertex cap the regenerated mesh
-resolves the crack about 1.6x finer, and it also needs no base-mesh bookkeeping, so
-regeneration is the choice; a remesh every few steps costs about one or two time steps.
+(``SetRefinementFlags`` + ``Refine`` until every longest edge <= 1.5 h) for the field
+``h = clip(hmin + 0.3 d, hmin, 0.1)`` around a crack on the unit square, hmin = 0.005 /
+0.0025 / 0.00125: bisection 0.03 / 0.04 / 0.09 s against 0.08 / 0.14 / 0.33 s, but 2.4-2.7x
+the vertices (2,338 / 4,595 / 9,044 against 956 / 1,810 / 3,410), sizes overshooting the
+request (median L/h 0.8) and worse shapes (5th percentile of the smallest angle 31 deg against
+41 deg). Under a vertex cap regeneration resolves the crack ~1.6x finer and needs no hierarchy
+bookkeeping, so it is the choice; a remesh every few steps costs about one or two time steps.
 
 Dimension: everything but :func:`sample_size_field`'s lattice and the Netgen geometry is
 written for d = 2 or 3 (``h^-d``, facets of d vertices); 3D needs an OCC geometry and a
@@ -65,8 +68,8 @@ from .scene import Geometry
 
 log = logging.getLogger(__name__)
 
-VERTEX_DENSITY = 1.4
-"""c in ``nv ~ c * int h(x)^-2 dx`` for 2D Netgen meshes (h = requested size)."""
+VERTEX_DENSITY = 1.45
+"""c in ``nv ~ c * int h(x)^-2 dx`` for 2D Netgen meshes (h = graded requested size)."""
 
 SIZE_RATIO = 1.3
 """Netgen meshes graded fields this much coarser than asked; sizes are divided by it."""
@@ -144,7 +147,7 @@ class SizeField:
 
     def predicted_vertices(self, density: float = VERTEX_DENSITY) -> float:
         """``c * sum_p w_p / h_p^d``: the vertex count Netgen will roughly produce."""
-        return predict_vertices(self.sizes, self.weights, density=density)
+        return predict_vertices(self.sizes, self.weights, density=density, dim=self.points.shape[1])
 
 
 # -- the size field ---------------------------------------------------------------------------
@@ -315,7 +318,10 @@ def sample_size_field(mesh: ngs.Mesh, sizes: np.ndarray, *, density: float = DEN
     holds the point and grows it by 0.3 h per h elsewhere). Each point carries the element's
     measure divided by its number of points.
     """
-    geom = ElementGeometry.of(mesh)
+    return _sample(ElementGeometry.of(mesh), sizes, density)
+
+
+def _sample(geom: ElementGeometry, sizes: np.ndarray, density: float = DENSITY) -> SizeField:
     sizes = np.asarray(sizes, dtype=float)
     if sizes.shape != geom.measures.shape:
         raise ValueError(f"sizes has shape {sizes.shape}; the mesh has {len(geom.measures)} elements")
@@ -378,12 +384,13 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
     density, dim : float, int
         The prediction ``density * sum w / h^dim``.
     grade : callable, optional
-        Applied to each candidate before predicting (e.g. :func:`grade_sizes` on the mesh).
+        Applied to each candidate before predicting (e.g. :func:`element_grader`), since
+        Netgen will grade the field anyway.
 
     Returns
     -------
     (n,) array
-        ``sizes`` itself if it fits, else the coarsened field.
+        ``grade(sizes)`` if that fits, else the graded, coarsened field.
     """
     sizes = np.minimum(np.asarray(sizes, dtype=float), hmax)
     weights = np.asarray(weights, dtype=float)
@@ -393,7 +400,7 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
         return predict_vertices(grade(h), weights, density=density, dim=dim)
 
     if count(sizes) <= max_vertices:
-        return sizes
+        return grade(sizes)
     h_lo = float(sizes.min())
 
     def stage1(lam: float) -> np.ndarray:
@@ -403,7 +410,7 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
     if count(stage1(lam_max)) <= max_vertices:
         lam = _bisect(lambda t: count(stage1(t)) <= max_vertices, 0.0, lam_max)
         log.info("vertex cap: coarse part raised (lambda=%.3g), finest h=%.3g kept", lam, h_lo)
-        return stage1(lam)
+        return grade(stage1(lam))
     base = stage1(lam_max)
     s_max = 2.0
     while count(s_max * base) > max_vertices:
@@ -413,7 +420,7 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
     s = _bisect(lambda t: count(t * base) <= max_vertices, 1.0, s_max)
     log.warning("vertex cap: the finest sizes had to grow by %.3g (h_lo %.3g -> %.3g)",
                 s, h_lo, s * h_lo)
-    return s * base
+    return grade(s * base)
 
 
 def _bisect(fits: Callable[[float], bool], lo: float, hi: float, rtol: float = 1e-3) -> float:
@@ -523,7 +530,10 @@ def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray
 
 def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Any, sizes: np.ndarray, *, hmax: float,
                max_vertices: int, grading: float = NETGEN_GRADING) -> ngs.Mesh:
-    """Grade, sample and remesh: the new mesh for element sizes given on ``mesh``.
+    """Grade, cap, sample and remesh: the new mesh for element sizes given on ``mesh``.
+
+    The cap is applied here on the elements, with grading inside the prediction (a steep
+    field costs Netgen's grading halo), so :func:`remesh` rarely needs a second attempt.
 
     Parameters
     ----------
@@ -537,7 +547,10 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Any, sizes: np.ndarray, *, h
     hmax, max_vertices, grading
         As in :func:`remesh`.
     """
-    graded = grade_sizes(mesh, np.minimum(sizes, hmax), grading)
-    field = sample_size_field(mesh, graded)
+    geom = ElementGeometry.of(mesh)
+    grade = element_grader(geom, grading)
+    capped = cap_vertices(np.minimum(sizes, hmax), geom.measures, 0.95 * max_vertices, hmax=hmax,
+                          dim=geom.dim, grade=grade)
+    field = _sample(geom, capped)
     return remesh(geometry, field.points, field.sizes, weights=field.weights, hmax=hmax,
                   max_vertices=max_vertices, grading=grading)

@@ -283,9 +283,11 @@ class PhaseFieldStepper:
         ``output.history_every`` by default) and at the last step.
         """
         every = history_every or self.scene.output.history_every
-        while self.k < self.n_steps:
-            last = self.k + 1 == self.n_steps
-            yield self.step(diagnose=last or (self.k + 1) % every == 0)
+        # One TaskManager for the whole run: starting NGSolve's threads costs ~0.1 s each time.
+        with ngs.TaskManager():
+            while self.k < self.n_steps:
+                last = self.k + 1 == self.n_steps
+                yield self.step(diagnose=last or (self.k + 1) % every == 0)
 
     def z_node_values(self) -> np.ndarray:
         """z at the Lagrange nodes (vertices, then edge midpoints for P2)."""

@@ -7,7 +7,7 @@ from typing import Any
 
 from ngfrac.scene import Scene, apply_overrides, read_scene_data
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 DEMOS = ROOT / "demos"
 
 QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0"]
