@@ -9,7 +9,7 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.cracks import distance_to_polylines, optimal_profile
-from ngfrac.geometry import build_mesh
+from ngfrac.geometry import CRACK_BOUNDARY, build_mesh, netgen_geometry
 from ngfrac.meshing import ElementGeometry, adapt_mesh, enforce_crack_sizes
 from ngfrac.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
@@ -140,6 +140,25 @@ def test_crack_length_survives_a_transfer_to_a_regenerated_mesh():
     before, after = crack_length(z, EPS), crack_length(z_new, EPS)
     assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.02)  # line + half disc at the tip
     assert abs(after - before) < 0.005 * before, (before, after)
+
+
+def test_crack_length_survives_on_crack_aligned_meshes_at_eps_over_2():
+    # Both meshes have edges along the crack (netgen_geometry with cracks): no kink is cut.
+    mesh = build_mesh(SQUARE, 0.05, CRACK)
+    meshes = []
+    for h_band, hmax in ((EPS / 2, 0.1), (0.45 * EPS, 0.08)):
+        geom = ElementGeometry.of(mesh)
+        band = distance_to_polylines(geom.centroids, CRACK) < 6 * EPS
+        mesh = adapt_mesh(mesh, netgen_geometry(SQUARE, CRACK), np.where(band, h_band, hmax),
+                          hmax=hmax, max_vertices=10**6)
+        meshes.append(mesh)
+    old, new = meshes
+    assert CRACK_BOUNDARY in new.GetBoundaries() and "bottom" in new.GetBoundaries()
+    z = profile_field(old, 2)
+    z_new, _ = transfer_phase_field(z, z, ngs.H1(new, order=2))
+    before, after = crack_length(z, EPS), crack_length(z_new, EPS)
+    assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.005)
+    assert abs(after - before) < 0.001 * before, (before, after)
 
 
 @pytest.mark.slow
