@@ -1,15 +1,42 @@
-"""The elastic part of the models: spaces, sigma[u]:e[v], Dirichlet data.
+"""The elastic part of the models: spaces, sigma[u]:e[v], Dirichlet data, body force.
 
 Each model gives the phase-field stepper what it needs about u; the fracture part (z, the
-surface energy) is the same for all models and lives in the stepper.
+surface energy) is the same for all models and lives in the stepper. The interface:
+
+- ``space(mesh, order, loads)``: the u-space, Dirichlet where (and in the components where)
+  a load prescribes u;
+- ``stress_strain(u, v)`` = sigma[u]:e[v] and ``energy_density(u)`` = sigma[u]:e[u];
+- ``boundary_values(mesh, loads, t)``: one CoefficientFunction with the prescribed values, and
+  ``set_boundary(gf, cf)`` to put them on the Dirichlet dofs of a GridFunction;
+- ``body_force(material, t)``: f as a CoefficientFunction of u's shape, or None when f = 0.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 import ngsolve as ngs
 
-from .scene import Load, Scene
+from .expressions import Expression
+from .scene import Components, Load, Material, Scene
+
+
+class ElasticModel(Protocol):
+    """What the stepper uses of a model."""
+
+    name: str
+    n_components: int
+    component_names: tuple[str, ...]
+
+    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace: ...
+    def stress_strain(self, u: Any, v: Any) -> Any: ...
+    def energy_density(self, u: Any) -> Any: ...
+    def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any: ...
+    def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None: ...
+    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None: ...
+
+
+def _is_zero(expression: Expression | str) -> bool:
+    return isinstance(expression, Expression) and expression.is_constant and expression.value() == 0
 
 
 class AntiPlane:
@@ -22,13 +49,16 @@ class AntiPlane:
     """
 
     name = "mode3"
+    n_components = 1
+    component_names = ("z",)
+    """u is the out-of-plane displacement, so its reaction is a force along z."""
 
     def __init__(self, mu: float) -> None:
         self.mu = mu
 
-    def space(self, mesh: ngs.Mesh, order: int, dirichlet: str) -> ngs.FESpace:
-        """The displacement space, Dirichlet on the boundaries in ``dirichlet`` ("a|b")."""
-        return ngs.H1(mesh, order=order, dirichlet=dirichlet)
+    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
+        """The displacement space, Dirichlet on every loaded boundary."""
+        return ngs.H1(mesh, order=order, dirichlet="|".join(load.boundary for load in loads))
 
     def stress_strain(self, u: Any, v: Any) -> Any:
         """The bilinear integrand sigma[u]:e[v]."""
@@ -43,9 +73,120 @@ class AntiPlane:
         return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t) for load in loads},
                                default=0)
 
+    def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None:
+        """Interpolate ``cf`` into the Dirichlet dofs of ``gf`` (its other dofs are unspecified)."""
+        gf.Set(cf, ngs.BND)
 
-def make_model(scene: Scene) -> AntiPlane:
-    """The elastic model the scene asks for."""
-    if scene.model.kind == "mode3":
-        return AntiPlane(scene.material.mu)
-    raise ValueError(f"model {scene.model.kind!r} is not implemented")  # scene validation prevents this
+    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
+        """The out-of-plane force f, or None when it is zero."""
+        force = material.body_force
+        return None if _is_zero(force) else force.to_coefficient(t)
+
+
+class Elasticity:
+    """Linear isotropic elasticity with a vector u, ``sigma = 2 mu e + lam tr(e) I``.
+
+    Parameters
+    ----------
+    lam, mu : float
+        The Lame constants that act in the model's dimension.
+    dim : int
+        Components of u (2 in the plane; 3 is for a 3D mesh).
+    """
+
+    name = "elasticity"
+    COMPONENTS = ("x", "y", "z")
+
+    def __init__(self, lam: float, mu: float, dim: int = 2) -> None:
+        self.lam, self.mu, self.n_components = lam, mu, dim
+        self.component_names = self.COMPONENTS[:dim]
+
+    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
+        """VectorH1, Dirichlet in component i on the boundaries whose load gives that component."""
+        flags = {f"dirichlet{c}": "|".join(load.boundary for load in loads if not load.free[i])
+                 for i, c in enumerate(self.component_names)}
+        return ngs.VectorH1(mesh, order=order, **flags)
+
+    def strain(self, u: Any) -> Any:
+        """e[u] = sym(grad u)."""
+        return ngs.Sym(ngs.grad(u))
+
+    def stress_strain(self, u: Any, v: Any) -> Any:
+        """The bilinear integrand ``sigma[u]:e[v] = 2 mu e[u]:e[v] + lam tr e[u] tr e[v]``."""
+        eu, ev = self.strain(u), self.strain(v)
+        return 2 * self.mu * ngs.InnerProduct(eu, ev) + self.lam * ngs.Trace(eu) * ngs.Trace(ev)
+
+    def energy_density(self, u: Any) -> Any:
+        """sigma[u]:e[u] (twice the elastic energy density of the sound material)."""
+        return self.stress_strain(u, u)
+
+    def stress(self, u: Any) -> Any:
+        """sigma[u] (of the sound material), a dim x dim CoefficientFunction."""
+        e = self.strain(u)
+        return 2 * self.mu * e + self.lam * ngs.Trace(e) * ngs.Id(self.n_components)
+
+    def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any:
+        """One vector CoefficientFunction with each load's components on its boundary
+        (0 in free components, which :meth:`set_boundary` never reads)."""
+        def vector(value: Components) -> Any:
+            return ngs.CoefficientFunction(tuple(
+                0.0 if free else entry.to_coefficient(t) for entry, free in zip(value, value.free)))
+
+        return mesh.BoundaryCF({load.boundary: vector(load.value) for load in loads},
+                               default=ngs.CoefficientFunction((0.0,) * self.n_components))
+
+    def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None:
+        """Interpolate ``cf`` into the Dirichlet dofs of ``gf``, component by component.
+
+        Each component space knows its own Dirichlet boundaries; ``Set(cf, BND)`` on the whole
+        VectorH1 would not, and would average a free component's placeholder into a corner.
+        """
+        for i, component in enumerate(gf.components):
+            component.Set(cf[i], ngs.BND)
+
+    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
+        """f = [fx, fy] as a vector CoefficientFunction, or None when it is zero."""
+        force = material.body_force
+        if not isinstance(force, Components):
+            return None  # a scalar body force is only allowed when it is 0 (Model.check)
+        if all(_is_zero(entry) for entry in force):
+            return None
+        return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in force))
+
+
+class PlaneStrain(Elasticity):
+    """Plane strain: the in-plane part of 3D elasticity with e_zz = 0 (3D Lame constants)."""
+
+    name = "plane_strain"
+
+    def __init__(self, lam: float, mu: float) -> None:
+        super().__init__(lam, mu, dim=2)
+
+
+class PlaneStress(Elasticity):
+    """Plane stress (sigma_zz = 0): ``lam* = 2 lam mu / (lam + 2 mu)`` replaces lam.
+
+    Parameters
+    ----------
+    lam, mu : float
+        The 3D Lame constants; ``self.lam`` is the effective lam*.
+    """
+
+    name = "plane_stress"
+
+    def __init__(self, lam: float, mu: float) -> None:
+        super().__init__(2 * lam * mu / (lam + 2 * mu), mu, dim=2)
+        self.lam_3d = lam
+
+
+def make_model(scene: Scene) -> AntiPlane | Elasticity:
+    """The elastic model the scene asks for (checks that loads and moduli fit it)."""
+    scene.model.check(scene.material, scene.loads)
+    kind = scene.model.kind
+    if kind == "mode3":
+        return AntiPlane(scene.material.shear_modulus)
+    if kind == "plane_strain":
+        return PlaneStrain(*scene.material.lame)
+    if kind == "plane_stress":
+        return PlaneStress(*scene.material.lame)
+    raise ValueError(f"model {kind!r} is not implemented")  # scene validation prevents this

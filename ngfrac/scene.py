@@ -22,7 +22,7 @@ import numpy as np
 
 from .expressions import Expression, ExpressionError
 
-MODELS = ("mode3",)
+MODELS = ("mode3", "plane_strain", "plane_stress")
 """Model names a scene may choose (``model.kind``)."""
 
 
@@ -58,9 +58,57 @@ class _Section:
         """Check value ranges; overridden by sections that have any."""
 
 
+FREE = "free"
+"""A component of a vector load that is not prescribed (rollers: ``value = ["free", "0"]``)."""
+
+
+class Components(tuple):
+    """One expression per component of a vector, as a scene writes it: ``["0", "10*t"]``.
+
+    Entries are :class:`Expression` or, in loads, the string ``"free"`` (that component
+    is not prescribed on the boundary).
+    """
+
+    @classmethod
+    def of(cls, value: list[Any], key: str) -> "Components":
+        """Parse a TOML list; ``key`` names it in error messages."""
+        entries: list[Expression | str] = []
+        for i, item in enumerate(value):
+            if item == FREE:
+                entries.append(FREE)
+                continue
+            try:
+                entries.append(Expression.of(item))
+            except ExpressionError as err:
+                raise SceneError(f"{key}[{i}]: {err}") from None
+        return cls(entries)
+
+    @property
+    def free(self) -> tuple[bool, ...]:
+        """Which components are left free."""
+        return tuple(entry == FREE for entry in self)
+
+    @property
+    def names(self) -> frozenset[str]:
+        """The variables the expressions use."""
+        return frozenset().union(*(e.names for e in self if isinstance(e, Expression)))
+
+    @property
+    def text(self) -> str:
+        return "[" + ", ".join(f'"{e}"' for e in self) + "]"
+
+    def __str__(self) -> str:
+        return self.text
+
+
 @dataclass(frozen=True)
 class Model(_Section):
-    """Which equations to solve."""
+    """Which equations to solve.
+
+    ``mode3``: anti-plane shear, u scalar (out of plane). ``plane_strain`` and
+    ``plane_stress``: u = (ux, uy) in the plane, ``sigma = 2 mu e + lambda tr(e) I`` with the 3D
+    Lame constants (plane strain) or ``lambda* = 2 lambda mu / (lambda + 2 mu)`` (plane stress).
+    """
 
     SECTION: ClassVar[str] = "model"
     kind: str = "mode3"
@@ -72,27 +120,111 @@ class Model(_Section):
             raise SceneError(f"model.kind = {self.kind!r} is not a known model{hint}; "
                              f"choose one of {', '.join(MODELS)}")
 
+    @property
+    def n_components(self) -> int:
+        """Components of u: 1 for mode III, 2 for the plane models."""
+        return 1 if self.kind == "mode3" else 2
+
+    def check(self, material: "Material", loads: tuple["Load", ...]) -> None:
+        """What spans sections: loads, body force and moduli must fit the model.
+
+        Mode III takes one expression per load and a scalar body force; the plane models take
+        ``[ux, uy]`` (``"free"`` allowed in loads), ``[fx, fy]`` and a pair of moduli.
+        """
+        kind, n = self.kind, self.n_components
+        for i, load in enumerate(loads):
+            if n == 1 and isinstance(load.value, Components):
+                raise SceneError(f"loads[{i}].value = {load.value.text} is a list, but model.kind = "
+                                 "'mode3' takes one expression (the out-of-plane displacement)")
+            if n > 1 and not isinstance(load.value, Components):
+                raise SceneError(f"loads[{i}].value = {load.value.text!r} is one expression, but "
+                                 f"model.kind = {kind!r} needs [ux, uy], e.g. [\"0\", \"10*t\"] "
+                                 "(\"free\" leaves a component unconstrained)")
+            if n > 1 and len(load.value) != n:
+                raise SceneError(f"loads[{i}].value = {load.value.text} has {len(load.value)} "
+                                 f"entries, but model.kind = {kind!r} needs {n}: [ux, uy]")
+        force = material.body_force
+        if n == 1 and isinstance(force, Components):
+            raise SceneError(f"material.body_force = {force.text} is a list, but model.kind = "
+                             "'mode3' takes one expression (the out-of-plane force)")
+        if n > 1 and not isinstance(force, Components) and not (force.is_constant and force.value() == 0):
+            raise SceneError(f"material.body_force = {force.text!r} is one expression, but "
+                             f"model.kind = {kind!r} needs [fx, fy]")
+        if n > 1 and isinstance(force, Components) and len(force) != n:
+            raise SceneError(f"material.body_force = {force.text} has {len(force)} entries, but "
+                             f"model.kind = {kind!r} needs {n}: [fx, fy]")
+        if n > 1 and material.moduli not in (("mu", "lam"), ("E", "nu")):
+            given = ", ".join(material.moduli) or "none"
+            raise SceneError(f"material: model.kind = {kind!r} needs the elastic moduli lam and mu, "
+                             f"or E and nu (given: {given})")
+
 
 @dataclass(frozen=True)
 class Material(_Section):
     """Elastic moduli and fracture toughness.
 
-    ``mu`` is the shear modulus (mode III uses only it); ``gamma`` is Griffith's G_c, a
-    number or an expression in x, y; ``body_force`` is f in ``-div sigma = f``.
+    The moduli are one pair, ``lam`` and ``mu`` (3D Lame constants) or ``E`` and ``nu``;
+    mode III may give ``mu`` alone (and without any modulus uses mu = 1). Keys not given are
+    NaN. ``gamma`` is Griffith's G_c, a number or an expression in x, y; ``body_force`` is f in
+    ``-div sigma = f``: one expression for mode III, ``[fx, fy]`` for the plane models.
     """
 
     SECTION: ClassVar[str] = "material"
-    mu: float = 1.0
+    PAIRS: ClassVar[tuple[tuple[str, ...], ...]] = ((), ("mu",), ("mu", "lam"), ("E", "nu"))
+    DEFAULT_MU: ClassVar[float] = 1.0
+    """Mode III shear modulus when the scene gives no modulus."""
+    mu: float = math.nan
+    lam: float = math.nan
+    E: float = math.nan
+    nu: float = math.nan
     gamma: Expression = Expression("1.0")
-    body_force: Expression = Expression("0.0")
-    """Body force f (mode III: out of plane), an expression in x, y, t."""
+    body_force: Expression | Components = Expression("0.0")
+    """Body force f, expressions in x, y, t (mode III: out of plane)."""
 
     def validate(self) -> None:
-        _require(self.mu > 0, self.SECTION, "mu", self.mu, "the shear modulus must be > 0")
+        s = self.SECTION
+        if self.moduli not in self.PAIRS:
+            given = ", ".join(f"{_key(s, k)} = {getattr(self, k)!r}" for k in self.moduli)
+            raise SceneError(f"{given} is not allowed: give exactly one pair of elastic moduli, "
+                             "lam and mu, or E and nu (mode3 may give mu alone)")
+        if "mu" in self.moduli:
+            _require(self.mu > 0, s, "mu", self.mu, "the shear modulus must be > 0")
+        if "lam" in self.moduli:
+            _require(3 * self.lam + 2 * self.mu > 0, s, "lam", self.lam,
+                     f"must be > -2 mu/3 = {-2 * self.mu / 3:g} (a Poisson ratio above -1)")
+        if "E" in self.moduli:
+            _require(self.E > 0, s, "E", self.E, "Young's modulus must be > 0")
+            _require(-1 < self.nu < 0.5, s, "nu", self.nu, "Poisson's ratio must be in (-1, 0.5)")
+        if isinstance(self.body_force, Components):
+            _require(len(self.body_force) > 0 and not any(self.body_force.free), s, "body_force",
+                     self.body_force.text, "give one expression per component, none 'free'")
         if "z" in self.body_force.names:
             raise SceneError(f"material.body_force = {self.body_force.text!r} uses z, but the domain is 2D")
         if "t" in self.gamma.names:
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
+
+    @property
+    def moduli(self) -> tuple[str, ...]:
+        """The elastic moduli the scene gives, in field order (mu, lam, E, nu)."""
+        return tuple(k for k in ("mu", "lam", "E", "nu") if not math.isnan(getattr(self, k)))
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """The 3D Lame constants (lambda, mu); from E, nu:
+        ``lambda = E nu / ((1 + nu)(1 - 2 nu))``, ``mu = E / (2 (1 + nu))``."""
+        if self.moduli == ("E", "nu"):
+            E, nu = self.E, self.nu
+            return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+        if self.moduli == ("mu", "lam"):
+            return self.lam, self.mu
+        raise ValueError(f"material gives {self.moduli or 'no moduli'}, not lam and mu or E and nu")
+
+    @property
+    def shear_modulus(self) -> float:
+        """mu, from whichever moduli are given (1 when none is)."""
+        if self.moduli == ("E", "nu"):
+            return self.lame[1]
+        return self.DEFAULT_MU if math.isnan(self.mu) else self.mu
 
 
 @dataclass(frozen=True)
@@ -173,11 +305,27 @@ class Crack(_Section):
 
 @dataclass(frozen=True)
 class Load(_Section):
-    """A Dirichlet displacement on one named boundary, an expression in x, y, t."""
+    """A Dirichlet displacement on one named boundary, expressions in x, y, t.
+
+    Mode III: one expression, ``value = "10*t"``. Plane models: one per component,
+    ``value = ["0", "10*t"]``; ``"free"`` leaves a component unconstrained (rollers:
+    ``value = ["free", "0"]``).
+    """
 
     SECTION: ClassVar[str] = "loads"
     boundary: str = REQUIRED  # type: ignore[assignment]
-    value: Expression = REQUIRED  # type: ignore[assignment]
+    value: Expression | Components = REQUIRED  # type: ignore[assignment]
+
+    def validate(self) -> None:
+        if isinstance(self.value, Components):
+            _require(len(self.value) > 0, self.SECTION, "value", [], "give [ux, uy]")
+            _require(not all(self.value.free), self.SECTION, "value", self.value.text,
+                     "every component is free, so the load constrains nothing; remove it")
+
+    @property
+    def free(self) -> tuple[bool, ...]:
+        """Which components are left free (mode III: never)."""
+        return self.value.free if isinstance(self.value, Components) else (False,)
 
 
 @dataclass(frozen=True)
@@ -354,7 +502,10 @@ class Scene:
             return value
 
         def section(obj: Any) -> dict[str, Any]:
-            return {f.name: plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+            values = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
+            # NaN marks an optional number the scene did not give (material moduli)
+            return {k: plain(v) for k, v in values.items()
+                    if not (isinstance(v, float) and math.isnan(v))}
 
         out: dict[str, Any] = {"name": self.name}
         for name in SECTIONS:
@@ -408,6 +559,8 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
         if not isinstance(value, str):
             raise SceneError(f"{key} = {value!r} must be a string")
         return value
+    if hint == Expression | Components:
+        return Components.of(value, key) if isinstance(value, list) else _convert(value, Expression, key)
     if hint is Expression:
         try:
             return Expression.of(value)
