@@ -242,12 +242,12 @@ def element_maximum(mesh: ngs.Mesh, gf: ngs.GridFunction,
     values = nodes.values(gf)
     result = values[geom.vertices].max(axis=1)
     if nodes.order == 2:
-        edge_ids = _edge_numbers(nodes.edge_vertices, geom.vertices)
+        edge_ids = edge_numbers(nodes.edge_vertices, geom.vertices)
         np.maximum(result, values[nodes.nv + edge_ids].max(axis=1), out=result)
     return result
 
 
-def _edge_numbers(edge_vertices: np.ndarray, element_vertices: np.ndarray) -> np.ndarray:
+def edge_numbers(edge_vertices: np.ndarray, element_vertices: np.ndarray) -> np.ndarray:
     """Edge numbers (rows of ``edge_vertices``) of each element's edges, vectorised."""
     nv = int(max(edge_vertices.max(), element_vertices.max())) + 1
     keys = np.sort(edge_vertices, axis=1) @ np.array([nv, 1])

@@ -398,9 +398,45 @@ class Output(_Section):
                  "must be in -1..5 (-1 = order - 1)")
 
 
+@dataclass(frozen=True)
+class Adaptivity(_Section):
+    """Mesh adaptation driven by an a-posteriori estimator on z (refinement and coarsening).
+
+    Sizes are 0 for "derived from epsilon": ``h_crack`` (where z >= 0.9, the crack core)
+    defaults to max(hmin, epsilon/10), ``h_band`` (where z >= 0.1) to epsilon/4, ``h_tip``
+    (within ``tip_margin`` of the tip) to h_crack, ``hmax`` to a tenth of the shorter side,
+    ``tip_margin`` to 5 epsilon.
+    """
+
+    SECTION: ClassVar[str] = "adaptivity"
+    enabled: bool = False
+    estimator: str = "zz"
+    every: int = 1
+    max_vertices: int = 5000
+    hmin: float = 2e-3
+    hmax: float = 0.0
+    h_crack: float = 0.0
+    h_band: float = 0.0
+    h_tip: float = 0.0
+    tip_margin: float = 0.0
+
+    def validate(self) -> None:
+        s = self.SECTION
+        _require(self.estimator in ("zz", "residual"), s, "estimator", self.estimator,
+                 "choose 'zz' or 'residual'")
+        _require(self.every >= 1, s, "every", self.every, "must be >= 1 (steps between checks)")
+        _require(self.max_vertices >= 100, s, "max_vertices", self.max_vertices, "must be >= 100")
+        _require(self.hmin > 0, s, "hmin", self.hmin, "must be > 0")
+        for name in ("hmax", "h_crack", "h_band", "h_tip", "tip_margin"):
+            value = getattr(self, name)
+            _require(value >= 0, s, name, value, "must be >= 0 (0 = derived from epsilon)")
+        _require(self.hmax == 0 or self.hmax >= self.hmin, s, "hmax", self.hmax, "must be >= hmin")
+
+
 SECTIONS: dict[str, type] = {
     "model": Model, "material": Material, "phase_field": PhaseField, "geometry": Geometry,
     "time": TimeSettings, "discretization": Discretization, "output": Output,
+    "adaptivity": Adaptivity,
 }
 LISTS: dict[str, type] = {"cracks": Crack, "loads": Load}
 
@@ -420,6 +456,7 @@ class Scene:
     material: Material = field(default_factory=Material)
     discretization: Discretization = field(default_factory=Discretization)
     output: Output = field(default_factory=Output)
+    adaptivity: Adaptivity = field(default_factory=Adaptivity)
 
     def __post_init__(self) -> None:
         names = self.geometry.boundary_names
@@ -437,6 +474,7 @@ class Scene:
             seen.add(load.boundary)
             if "z" in load.value.names:
                 raise SceneError(f"loads[{i}].value = {load.value.text!r} uses z, but the domain is 2D")
+        self.model.check(self.material, self.loads)
         for i, crack in enumerate(self.cracks):
             for point in crack.points:
                 if not self.geometry.contains(point):
@@ -551,6 +589,10 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
         if not math.isfinite(value):
             raise SceneError(f"{key} = {value!r} must be a finite number")
         return float(value)
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise SceneError(f"{key} = {value!r} must be true or false")
+        return value
     if hint is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise SceneError(f"{key} = {value!r} must be an integer")

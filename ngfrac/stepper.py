@@ -22,12 +22,14 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
+from .adaptivity import Adaptation, MeshAdapter
 from .cracks import crack_tip, distance_to_polylines, optimal_profile
 from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
 from .models import make_model
 from .nodal import LagrangeNodes
 from .scene import Scene
+from .transfer import crack_length, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
 
@@ -38,7 +40,12 @@ class SolverError(RuntimeError):
 
 @dataclass(frozen=True)
 class StepRecord:
-    """What one step reports. Diagnostic fields are NaN on steps that skip diagnostics."""
+    """What one step reports. Diagnostic fields are NaN on steps that skip diagnostics.
+
+    ``eta_total`` is the estimator total of the last adaptation, ``n_adapt`` the number of
+    mesh changes so far, ``step_s`` the wall time of this step and ``adapt_s`` the part of it
+    spent changing the mesh.
+    """
 
     step: int
     t: float
@@ -55,6 +62,10 @@ class StepRecord:
     tip_y: float = math.nan
     dz_max: float = math.nan
     z_iterations: int = 0
+    eta_total: float = math.nan
+    n_adapt: int = 0
+    step_s: float = math.nan
+    adapt_s: float = 0.0
 
     @property
     def has_diagnostics(self) -> bool:
@@ -95,9 +106,16 @@ class PhaseFieldStepper:
         gamma = scene.material.gamma
         # A constant toughness stays a number: no coefficient evaluation in the forms.
         self.gamma = gamma.value() if gamma.is_constant else gamma.to_coefficient()
-        self._setup(mesh if mesh is not None
-                    else build_mesh(scene.geometry, scene.mesh_size, self._polylines))
+        self.adapter = MeshAdapter(scene) if scene.adaptivity.enabled else None
+        self.adaptations: list[Adaptation] = []
+        given = mesh is not None
+        if mesh is None:
+            size = self.adapter.sizes.hmax if self.adapter else scene.mesh_size
+            mesh = build_mesh(scene.geometry, size, self._polylines)
+        self._setup(mesh)
         self._set_initial_state()
+        if self.adapter is not None and not given:
+            self._adapt_initial_mesh()
 
     # -- set-up -----------------------------------------------------------------------------
     def _setup(self, mesh: ngs.Mesh) -> None:
@@ -105,8 +123,7 @@ class PhaseFieldStepper:
         sc = self.scene
         pf, disc = sc.phase_field, sc.discretization
         self.mesh = mesh
-        dirichlet = "|".join(load.boundary for load in sc.loads)
-        self.fes_u = self.model.space(mesh, disc.order, dirichlet)
+        self.fes_u = self.model.space(mesh, disc.order, sc.loads)
         self.fes_z = ngs.H1(mesh, order=disc.z_order)
         self.nodes = LagrangeNodes(self.fes_z)
         self.u = ngs.GridFunction(self.fes_u, "u")
@@ -133,8 +150,7 @@ class PhaseFieldStepper:
         if pf.alpha1 > 0:
             self.m_u = ngs.BilinearForm(pf.alpha1 / dt * u * v * dx, symmetric=True).Assemble()
         self._inv_u = None
-        force = sc.material.body_force
-        self.body_force = None if force.is_constant and force.value() == 0 else force.to_coefficient(self.time)
+        self.body_force = self.model.body_force(sc.material, self.time)
         self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
 
         drive = self.u_prev if disc.coupling == "paper" else self.u
@@ -171,6 +187,53 @@ class PhaseFieldStepper:
             self.u.vec.data += inverse * residual
         self.u_prev.vec.data = self.u.vec
 
+    # -- mesh adaptation --------------------------------------------------------------------
+    INITIAL_PASSES = 3
+
+    def _adapt_initial_mesh(self) -> None:
+        """Resolve z0 before the first step: remesh and set z0 anew from its formula."""
+        assert self.adapter is not None
+        for _ in range(self.INITIAL_PASSES):
+            mesh, _ = self.adapter.new_mesh(self.mesh, self.z, self.tip())
+            self._setup(mesh)
+            self._set_initial_state()
+        self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), self.tip())
+
+    def tip(self) -> np.ndarray:
+        """The current crack tip (see :func:`ngfrac.cracks.crack_tip`)."""
+        if self._sizes is None:
+            self._sizes = element_sizes(self.mesh)
+        near = self.adapter.sizes.h_band if self.adapter else float(self._sizes.max())
+        band = self.scene.phase_field.epsilon * math.log(2.0) + near
+        return crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band)
+
+    def adapt(self, tip: np.ndarray | None = None) -> Adaptation:
+        """Change the mesh now and move u and z (with its non-repair bound) onto it."""
+        if self.adapter is None:
+            raise RuntimeError("adaptivity is not enabled in this scene ([adaptivity] enabled = true)")
+        tip = self.tip() if tip is None else tip
+        eps = self.scene.phase_field.epsilon
+        nv_before = self.mesh.nv
+        length_before = crack_length(self.z, eps)
+        new_mesh, times = self.adapter.new_mesh(self.mesh, self.z, tip)
+        started = time.perf_counter()
+        z_old, u_old = self.z, self.u
+        self._setup(new_mesh)
+        z_new, _ = transfer_phase_field(z_old, z_old, self.fes_z)
+        self.z.vec.data = z_new.vec
+        method = "nodes" if self.scene.discretization.order <= 2 and self.fes_u.dim == 1 else "set"
+        self.u.vec.data = transfer(u_old, self.fes_u, method=method).vec
+        self.u_prev.vec.data = self.u.vec
+        times["transfer_s"] = time.perf_counter() - started
+        self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), tip)
+        record = Adaptation(step=self.k, nv_before=nv_before, nv_after=self.mesh.nv,
+                            eta_total=self.adapter.eta_total, crack_length_before=length_before,
+                            crack_length_after=crack_length(self.z, eps), **times)
+        self.adaptations.append(record)
+        log.info("step %d: new mesh %d -> %d vertices in %.2f s", self.k, nv_before, self.mesh.nv,
+                 sum(times.values()))
+        return record
+
     # -- one step ---------------------------------------------------------------------------
     @property
     def t(self) -> float:
@@ -182,7 +245,7 @@ class PhaseFieldStepper:
         return self.scene.time.n_steps
 
     def _apply_boundary_values(self) -> None:
-        self.u_boundary.Set(self._boundary_cf, ngs.BND)
+        self.model.set_boundary(self.u_boundary, self._boundary_cf)
         free = np.array(self.fes_u.FreeDofs(), dtype=bool)
         self.u.vec.FV().NumPy()[~free] = self.u_boundary.vec.FV().NumPy()[~free]
 
@@ -242,6 +305,7 @@ class PhaseFieldStepper:
         diagnose : bool
             Compute energies, crack length and tip (costs integrals); else those are NaN.
         """
+        started = time.perf_counter()
         self.k += 1
         self.time.Set(self.t)
         with ngs.TaskManager():
@@ -253,13 +317,25 @@ class PhaseFieldStepper:
             new = np.minimum(1.0, np.maximum(trial, old))
             self.nodes.assign(self.z, new)
         dz_max = float(np.max(new - old)) if len(new) else 0.0
-        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations)
+        adapt_s = 0.0
+        if self.adapter is not None and self.k % self.scene.adaptivity.every == 0:
+            adapt_started = time.perf_counter()
+            tip = self.tip()
+            if self.adapter.wants_new_mesh(self.mesh, self.nodes, new, tip):
+                with ngs.TaskManager():
+                    self.adapt(tip)
+            adapt_s = time.perf_counter() - adapt_started
+        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations,
+                           step_s=time.perf_counter() - started, adapt_s=adapt_s)
 
-    def record(self, diagnose: bool = True, dz_max: float = math.nan, z_iterations: int = 0) -> StepRecord:
+    def record(self, diagnose: bool = True, dz_max: float = math.nan, z_iterations: int = 0,
+               step_s: float = math.nan, adapt_s: float = 0.0) -> StepRecord:
         """A record of the current state (diagnostics only when asked for)."""
+        eta_total = self.adapter.eta_total if self.adapter is not None else math.nan
         base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self._started,
                     nv=self.mesh.nv, ndof=self.fes_u.ndof + self.fes_z.ndof,
-                    dz_max=dz_max, z_iterations=z_iterations)
+                    dz_max=dz_max, z_iterations=z_iterations, eta_total=eta_total,
+                    n_adapt=len(self.adaptations), step_s=step_s, adapt_s=adapt_s)
         if not diagnose:
             return StepRecord(**base)
         pf = self.scene.phase_field
@@ -268,10 +344,7 @@ class PhaseFieldStepper:
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
                          order=self.integration_order)
-        if self._sizes is None:
-            self._sizes = element_sizes(self.mesh)
-        band = self.scene.phase_field.epsilon * math.log(2.0) + float(self._sizes.max())
-        tip = crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band)
+        tip = self.tip()
         return StepRecord(**base, hmin=float(self._sizes.min()), hmax=float(self._sizes.max()),
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
                           crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]))

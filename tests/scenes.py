@@ -10,7 +10,8 @@ from ngfrac.scene import Scene, apply_overrides, read_scene_data
 ROOT = Path(__file__).resolve().parents[1]
 DEMOS = ROOT / "demos"
 
-QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0"]
+QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0",
+         "adaptivity.enabled=false"]
 
 
 def demo_data(name: str = "mode3_slit") -> dict[str, Any]:

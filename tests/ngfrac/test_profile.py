@@ -12,7 +12,8 @@ EPS = 0.04
 
 def initial_record(points, gamma, order_z=2, h=EPS / 2):
     scene = scene_from(demo_data(), f"phase_field.epsilon={EPS}", f"geometry.mesh_size={h}",
-                       f"material.gamma={gamma}", f"discretization.order_z={order_z}")
+                       f"material.gamma={gamma}", f"discretization.order_z={order_z}",
+                       "adaptivity.enabled=false")
     scene = scene.__class__(**{**scene.__dict__, "cracks": (scene.cracks[0].__class__(points=points),)})
     return PhaseFieldStepper(scene).record()
 

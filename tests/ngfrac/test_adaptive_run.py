@@ -1,0 +1,97 @@
+"""A full adaptive run of the slit demo (quick sizes): cap, hmin, bounds, transfers."""
+import numpy as np
+import pytest
+
+from ngfrac.adaptivity import AdaptivitySizes
+from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.transfer import evaluate, locate
+
+from scenes import demo_data, scene_from
+
+CAP = 2500
+HMIN = 2e-3
+
+
+class TransferWatch:
+    """Wraps ``stepper.adapt`` to compare z before and after each mesh change."""
+
+    def __init__(self, stepper):
+        self.stepper = stepper
+        self.original = stepper.adapt
+        self.worst_decrease = 0.0
+        stepper.adapt = self
+
+    def __call__(self, tip=None):
+        z_old = self.stepper.z
+        record = self.original(tip)
+        new_nodes = self.stepper.nodes
+        before = evaluate(z_old, locate(z_old.space.mesh, new_nodes.points))
+        after = new_nodes.values(self.stepper.z)
+        self.worst_decrease = max(self.worst_decrease,
+                                  float(np.max(np.clip(before, 0, 1) - after)))
+        return record
+
+
+@pytest.fixture(scope="module")
+def adaptive_run():
+    scene = scene_from(demo_data(), "phase_field.epsilon=0.04", "time.dt=1e-3",
+                       f"adaptivity.max_vertices={CAP}", f"adaptivity.hmin={HMIN}")
+    stepper = PhaseFieldStepper(scene)
+    watch = TransferWatch(stepper)
+    records, z_min, z_max, decrease = [stepper.record()], 1.0, 0.0, 0.0
+    previous = stepper.z_node_values()
+    n_adapt = 0
+    for record in stepper.run():
+        values = stepper.z_node_values()
+        z_min, z_max = min(z_min, values.min()), max(z_max, values.max())
+        if record.n_adapt == n_adapt:  # same mesh: compare node by node
+            decrease = max(decrease, float(np.max(previous - values)))
+        n_adapt = record.n_adapt
+        previous = values
+        records.append(record)
+    return scene, stepper, records, (z_min, z_max, decrease), watch
+
+
+def test_crack_crosses_on_an_adaptive_mesh(adaptive_run):
+    scene, stepper, records, _, _ = adaptive_run
+    assert max(r.tip_x for r in records) > 0.97
+    assert len(stepper.adaptations) >= 5
+
+
+def test_vertex_cap_is_never_exceeded(adaptive_run):
+    _, stepper, records, _, _ = adaptive_run
+    assert max(r.nv for r in records) <= CAP
+    assert max(a.nv_after for a in stepper.adaptations) <= CAP
+
+
+def test_hmin_is_respected(adaptive_run):
+    # Netgen is asked for nothing below hmin; its realized longest edges stay above 0.75 hmin
+    # (measured; the advancing front makes some elements smaller than the request).
+    _, _, records, _, _ = adaptive_run
+    smallest = min(r.hmin for r in records)
+    assert smallest >= 0.75 * HMIN, smallest
+
+
+def test_z_bounds_and_irreversibility(adaptive_run):
+    _, _, _, (z_min, z_max, decrease), watch = adaptive_run
+    assert z_min >= 0.0 and z_max <= 1.0
+    assert decrease <= 0.0
+    assert watch.worst_decrease <= 1e-12  # transfers never lower z at the new nodes
+
+
+def test_transfers_keep_the_crack_length(adaptive_run):
+    _, stepper, _, _, _ = adaptive_run
+    drops = [1 - a.crack_length_after / a.crack_length_before for a in stepper.adaptations]
+    assert max(drops) < 0.005, max(drops)
+
+
+def test_mesh_follows_the_tip(adaptive_run):
+    scene, stepper, records, _, _ = adaptive_run
+    sizes = AdaptivitySizes.of(scene)
+    grown = [a for a in stepper.adaptations if a.crack_length_before > records[0].crack_length + 0.2]
+    assert grown, "no adaptation after the crack grew"
+    # after the crack crossed, the fine elements lie along y = 0.5 all the way to the right
+    from ngfrac.meshing import ElementGeometry
+    geom = ElementGeometry.of(stepper.mesh)
+    near_right_end = (geom.centroids[:, 0] > 0.9) & (np.abs(geom.centroids[:, 1] - 0.5) < 0.02)
+    assert geom.diameters[near_right_end].min() < 2 * sizes.h_band
