@@ -36,11 +36,21 @@ def indicator(fes: ngs.FESpace, boundary: str, component: int = 0) -> ngs.GridFu
 
 
 def reaction(residual: ngs.BaseVector, fes: ngs.FESpace, boundary: str,
-             components: tuple[int, ...]) -> np.ndarray:
-    """``<R, w_i>`` for each component i in ``components`` (the constrained ones)."""
+             components: tuple[int, ...], cache: dict | None = None) -> np.ndarray:
+    """``<R, w_i>`` for each component i in ``components`` (the constrained ones).
+
+    ``cache`` (a dict kept per space) saves rebuilding the indicators every step.
+    """
     forces = np.zeros(fes.mesh.dim if isinstance(fes, ngs.VectorH1) else 1)
     for i in components:
-        forces[i] = ngs.InnerProduct(residual, indicator(fes, boundary, i).vec)
+        key = (boundary, i)
+        if cache is None or key not in cache:
+            w = indicator(fes, boundary, i)
+            if cache is not None:
+                cache[key] = w
+        else:
+            w = cache[key]
+        forces[i] = ngs.InnerProduct(residual, w.vec)
     return forces
 
 
@@ -80,7 +90,7 @@ def reaction_forces(stepper, boundaries: tuple[str, ...] | None = None) -> dict[
     out = {}
     for name in boundaries or tuple(loads):
         constrained = tuple(i for i, free in enumerate(loads[name].free) if not free)
-        out[name] = reaction(r, stepper.fes_u, name, constrained)
+        out[name] = reaction(r, stepper.fes_u, name, constrained, getattr(stepper, "indicators", None))
     return out
 
 

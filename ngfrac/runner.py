@@ -57,7 +57,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     record = stepper.record()
     if on_step is not None:
         on_step(stepper)
-    with HistoryWriter(out / "history.csv", StepRecord.columns()) as history:
+    with HistoryWriter(out / "history.csv", record.header()) as history:
         history.write(record.row())
         if vtk_every:
             write_snapshot(series, stepper)

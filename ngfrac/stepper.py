@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Iterator
 
 import numpy as np
@@ -28,6 +28,7 @@ from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
 from .models import make_model
 from .nodal import LagrangeNodes
+from .reactions import reaction_columns
 from .scene import Scene
 from .transfer import crack_length, transfer, transfer_phase_field
 
@@ -66,6 +67,8 @@ class StepRecord:
     n_adapt: int = 0
     step_s: float = math.nan
     adapt_s: float = 0.0
+    forces: dict[str, float] = field(default_factory=dict)
+    """Reaction force and mean displacement per loaded boundary: ``Fx_top``, ``ux_top``, ..."""
 
     @property
     def has_diagnostics(self) -> bool:
@@ -73,10 +76,15 @@ class StepRecord:
 
     @classmethod
     def columns(cls) -> list[str]:
-        return [f.name for f in fields(cls)]
+        """The fixed columns (without the per-boundary force columns)."""
+        return [f.name for f in fields(cls) if f.name != "forces"]
+
+    def header(self) -> list[str]:
+        """All column names of this record: the fixed ones, then the force columns."""
+        return self.columns() + list(self.forces)
 
     def row(self) -> list[float | int]:
-        return [getattr(self, name) for name in self.columns()]
+        return [getattr(self, name) for name in self.columns()] + list(self.forces.values())
 
 
 class PhaseFieldStepper:
@@ -133,6 +141,8 @@ class PhaseFieldStepper:
         self.u_boundary = ngs.GridFunction(self.fes_u, "u_boundary")
         self._boundary_cf = self.model.boundary_values(mesh, sc.loads, self.time)
         self._sizes: np.ndarray | None = None
+        self.indicators: dict = {}  # reaction-force test functions of this mesh
+        self.forces: dict[str, float] = {}
 
         dt = sc.time.dt
         # One quadrature, exact for constant gamma, in every form and energy: the u-step then
@@ -186,6 +196,7 @@ class PhaseFieldStepper:
                 residual.data += self.f_u.vec
             self.u.vec.data += inverse * residual
         self.u_prev.vec.data = self.u.vec
+        self.forces = reaction_columns(self)
 
     # -- mesh adaptation --------------------------------------------------------------------
     INITIAL_PASSES = 3
@@ -311,6 +322,8 @@ class PhaseFieldStepper:
         with ngs.TaskManager():
             self.u_prev.vec.data = self.u.vec
             self.solve_u()
+            if diagnose:  # before z changes and before any new mesh: the residual of this solve
+                self.forces = reaction_columns(self)
             iterations = self._solve_z()
             old = self.nodes.values(self.z)
             trial = self.nodes.values(self.z_trial)
@@ -345,7 +358,8 @@ class PhaseFieldStepper:
                          None if self.body_force is None else self.body_force * self.u,
                          order=self.integration_order)
         tip = self.tip()
-        return StepRecord(**base, hmin=float(self._sizes.min()), hmax=float(self._sizes.max()),
+        return StepRecord(**base, forces=dict(self.forces), hmin=float(self._sizes.min()),
+                          hmax=float(self._sizes.max()),
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
                           crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]))
 
