@@ -1,0 +1,229 @@
+"""Checkpoints: everything a stepper needs to continue a run exactly, in one HDF5 file.
+
+A checkpoint holds the step counter k, the current mesh (as :class:`~ngfrac.results.MeshArrays`,
+so a mesh made by adaptive remeshing is restored as it was), the dof vectors of u, u_prev and
+z (z is also the non-repair bound of the next step), the adaptivity state when the scene adapts,
+and the resolved scene with a hash of the keys that change the solution. Restoring into a
+stepper of the same scene continues bit for bit up to the round-off of a new factorization.
+
+The file is written under a temporary name and renamed (``os.replace``), so a run killed at any
+moment leaves either the previous checkpoint or the new one, never a partial file.
+
+Layout (``format_version`` 1)::
+
+    /                      attrs: format = "ngfrac-checkpoint", format_version, k, t, scene_hash
+    /scene                 the resolved scene as TOML text; attrs: sha256
+    /mesh/                 see MeshArrays
+    /fields/u, u_prev, z   dof vectors (Fletcher-32 checksums); attrs: space, order, dim
+    /adapter/              attrs: eta_total, adaptations (JSON); datasets last_tip, achieved
+
+A checkpoint is refused for a scene that differs in a key other than :data:`IGNORED_KEYS`
+(``[output]`` and ``time.t_end``: a restart may write differently or run longer).
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import h5py
+import ngsolve as ngs
+import numpy as np
+
+from .results import (IGNORED_KEYS, MeshArrays, ResultsError, StoredField, check_format,
+                      read_hdf5, read_scene, scene_differences, scene_hash, write_scene)
+from .scene import Scene
+
+if TYPE_CHECKING:
+    from .stepper import PhaseFieldStepper
+
+FORMAT = "ngfrac-checkpoint"
+FORMAT_VERSION = 1
+FIELDS = ("u", "u_prev", "z")
+"""The stepper's GridFunctions that a checkpoint stores."""
+
+
+class CheckpointError(RuntimeError):
+    """A checkpoint that cannot be written, read or used for this scene."""
+
+
+# -- state ------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class CheckpointState:
+    """A loaded checkpoint (see :func:`load_checkpoint`)."""
+
+    path: Path
+    k: int
+    t: float
+    scene_hash: str
+    mesh_arrays: MeshArrays
+    fields: dict[str, StoredField]
+    adapter: dict[str, Any] | None = None
+
+    def build_mesh(self) -> ngs.Mesh:
+        """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.results`)."""
+        return self.mesh_arrays.to_mesh()
+
+
+# -- writing ----------------------------------------------------------------------------------
+def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
+    """Write the stepper's state to ``path`` atomically (a temporary file, then a rename).
+
+    Raises :class:`CheckpointError` when the file cannot be written (a full disk, a missing
+    folder); an earlier checkpoint at ``path`` is then left as it was.
+    """
+    path = Path(path)
+    tmp = path.with_suffix(".tmp")
+    try:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["format"] = FORMAT
+            f.attrs["format_version"] = FORMAT_VERSION
+            f.attrs["k"] = int(stepper.k)
+            f.attrs["t"] = float(stepper.t)
+            f.attrs["scene_hash"] = scene_hash(stepper.scene)
+            write_scene(f, stepper.scene)
+            MeshArrays.of(stepper.mesh).write(f.create_group("mesh"))
+            group = f.create_group("fields")
+            for name in FIELDS:
+                StoredField.of(getattr(stepper, name)).write(group, name)
+            _write_adapter(f, stepper)
+        with open(tmp, "rb") as handle:  # the data must be on disk before the rename is
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except OSError as err:
+        tmp.unlink(missing_ok=True)
+        reason = err.strerror or str(err).splitlines()[0]
+        raise CheckpointError(f"cannot write checkpoint {str(path)!r} ({reason}); the previous "
+                              "checkpoint is unchanged") from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    _fsync_folder(path.parent)
+    return path
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Make the rename durable (POSIX; a no-op where folders cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _write_adapter(f: h5py.File, stepper: "PhaseFieldStepper") -> None:
+    """The adaptivity state that decides when the next mesh change happens."""
+    adapter = getattr(stepper, "adapter", None)
+    if adapter is None:
+        return
+    group = f.create_group("adapter")
+    group.attrs["eta_total"] = float(adapter.eta_total)
+    if adapter.last_tip is not None:
+        group.create_dataset("last_tip", data=np.asarray(adapter.last_tip, dtype=np.float64))
+    if adapter.achieved is not None:
+        group.create_dataset("achieved", data=np.asarray(adapter.achieved, dtype=np.float64))
+    records = [dataclasses.asdict(a) for a in getattr(stepper, "adaptations", [])]
+    group.attrs["adaptations"] = json.dumps(records)
+
+
+# -- reading ----------------------------------------------------------------------------------
+def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
+    """Read a checkpoint and check that it belongs to ``scene``.
+
+    Raises :class:`CheckpointError` with one line for a missing, foreign, truncated or
+    corrupt file, one from a newer ngfrac, or one written for another scene (the message
+    names the first key that differs). Keys in :data:`IGNORED_KEYS` may differ.
+    """
+    path = Path(path)
+    try:
+        with read_hdf5(path, "checkpoint", CheckpointError) as f:
+            check_format(f, path, FORMAT, FORMAT_VERSION, "checkpoint", CheckpointError)
+            stored, _ = read_scene(f, path, CheckpointError)
+            k, t = int(f.attrs["k"]), float(f.attrs["t"])
+            mesh = MeshArrays.read(f["mesh"])
+            fields = {name: StoredField.read(f["fields"][name]) for name in FIELDS}
+            adapter = _read_adapter(f["adapter"]) if "adapter" in f else None
+    except ResultsError as err:  # raised by the mesh checks
+        raise CheckpointError(f"checkpoint {str(path)!r}: {err}") from None
+    # Compare the scenes, not stored hashes: a newer ngfrac may add keys with defaults.
+    differences = scene_differences(stored, scene)
+    if differences:
+        raise CheckpointError(f"checkpoint {str(path)!r} was written for another scene "
+                              f"({differences[0]}{' and more' if len(differences) > 1 else ''}); "
+                              "restart with the scene it was written for")
+    if k < 0 or not math.isfinite(t):
+        raise CheckpointError(f"checkpoint {str(path)!r} is corrupt (step {k}, time {t})")
+    return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter)
+
+
+def _read_adapter(group: h5py.Group) -> dict[str, Any]:
+    return {"eta_total": float(group.attrs["eta_total"]),
+            "last_tip": group["last_tip"][()] if "last_tip" in group else None,
+            "achieved": tuple(float(v) for v in group["achieved"][()]) if "achieved" in group else None,
+            "adaptations": json.loads(str(group.attrs["adaptations"]))}
+
+
+# -- restoring --------------------------------------------------------------------------------
+def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
+    """Put a loaded checkpoint into ``stepper`` (a stepper of the same scene).
+
+    A stepper built on ``state.build_mesh()`` keeps its spaces; any other stepper is moved to
+    the checkpoint's mesh first (``stepper._setup``, as after a remesh). Factorizations are
+    rebuilt on the next step.
+    """
+    if scene_hash(stepper.scene) != state.scene_hash:
+        raise CheckpointError(f"checkpoint {str(state.path)!r} was written for another scene than "
+                              f"the stepper's ({stepper.scene.name!r})")
+    if not MeshArrays.of(stepper.mesh).same_as(state.mesh_arrays):
+        stepper._setup(state.build_mesh())
+    for name, stored in state.fields.items():
+        gf = getattr(stepper, name)
+        if not stored.matches(gf.space):
+            mine = StoredField.of(gf)
+            raise CheckpointError(f"checkpoint {str(state.path)!r}: field {name!r} is "
+                                  f"{stored.describe()}, the stepper's is {mine.describe()}")
+        gf.vec.FV().NumPy()[:] = stored.values
+    stepper.k = state.k
+    stepper.time.Set(stepper.t)
+    _restore_adapter(stepper, state)
+
+
+def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
+    adapter = getattr(stepper, "adapter", None)
+    if (adapter is None) != (state.adapter is None):
+        raise CheckpointError(f"checkpoint {str(state.path)!r} and the stepper disagree on "
+                              "whether the mesh adapts")
+    if adapter is None or state.adapter is None:
+        return
+    saved = state.adapter
+    adapter.eta_total = saved["eta_total"]
+    adapter.last_tip = None if saved["last_tip"] is None else np.array(saved["last_tip"])
+    adapter.achieved = saved["achieved"]
+    if saved["adaptations"]:
+        from .adaptivity import Adaptation
+        stepper.adaptations = [Adaptation(**record) for record in saved["adaptations"]]
+    else:
+        stepper.adaptations = []
+
+
+def resume(path: str | Path, scene: Scene) -> "PhaseFieldStepper":
+    """A stepper of ``scene`` continuing from the checkpoint at ``path``."""
+    from .stepper import PhaseFieldStepper
+
+    state = load_checkpoint(path, scene)
+    stepper = PhaseFieldStepper(scene, mesh=state.build_mesh())
+    restore(stepper, state)
+    return stepper
+
+
+__all__ = ["IGNORED_KEYS", "CheckpointError", "CheckpointState", "load_checkpoint", "restore",
+           "resume", "save_checkpoint", "scene_hash"]

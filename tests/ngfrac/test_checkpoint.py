@@ -1,0 +1,274 @@
+"""Checkpoints: a restored stepper continues like the uninterrupted one, also after SIGKILL;
+bad checkpoints give one clear error and stay as they were."""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import ngsolve as ngs
+import pytest
+
+from ngfrac.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoint, restore, resume,
+                               save_checkpoint)
+from ngfrac.results import MeshArrays
+from ngfrac.stepper import PhaseFieldStepper
+
+from scenes import quick_slit
+
+ROOT = Path(__file__).resolve().parents[2]
+
+SCENE = ("time.t_end=0.02",)
+N_STEPS, CHECKPOINT_AT = 20, 10
+COMPARED = ("E_total", "crack_length", "tip_x", "tip_y")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def single_thread():
+    """NGSolve's worker threads busy-wait; one thread is faster on a shared machine."""
+    ngs.SetNumThreads(1)
+    yield
+    ngs.SetNumThreads(os.cpu_count() or 1)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return quick_slit(*SCENE)
+
+
+@pytest.fixture(scope="module")
+def reference(scene, tmp_path_factory):
+    """The uninterrupted run: its records, and a checkpoint written at step CHECKPOINT_AT."""
+    folder = tmp_path_factory.mktemp("reference")
+    stepper = PhaseFieldStepper(scene)
+    records = {}
+    for _ in range(N_STEPS):
+        record = stepper.step()
+        records[record.step] = record
+        if record.step == CHECKPOINT_AT:
+            save_checkpoint(stepper, folder / "checkpoint.h5")
+    return records, folder / "checkpoint.h5"
+
+
+def _assert_same_history(records, reference, first):
+    """Records from step ``first`` to the end agree with the reference to round-off."""
+    assert sorted(records) == list(range(first, N_STEPS + 1))
+    for step, record in records.items():
+        for name in COMPARED:
+            got, want = getattr(record, name), getattr(reference[step], name)
+            assert got == pytest.approx(want, rel=1e-10, abs=1e-14), \
+                f"step {step}: {name} = {got!r} after restart, {want!r} uninterrupted"
+        forces = getattr(reference[step], "forces", {})
+        assert getattr(record, "forces", {}) == pytest.approx(forces, rel=1e-10, abs=1e-14), step
+
+
+def _continue(stepper):
+    records = {}
+    while stepper.k < N_STEPS:
+        record = stepper.step()
+        records[record.step] = record
+    return records
+
+
+def test_restart_reproduces_the_uninterrupted_history(scene, reference):
+    records, checkpoint = reference
+    state = load_checkpoint(checkpoint, scene)
+    assert state.k == CHECKPOINT_AT and state.t == pytest.approx(CHECKPOINT_AT * scene.time.dt)
+    stepper = PhaseFieldStepper(scene, mesh=state.build_mesh())
+    restore(stepper, state)
+    assert stepper.k == CHECKPOINT_AT and stepper.time.Get() == stepper.t
+    _assert_same_history(_continue(stepper), records, CHECKPOINT_AT + 1)
+
+
+def test_restore_moves_a_stepper_to_the_checkpoint_mesh(scene, reference):
+    """A stepper on another mesh is set up anew on the checkpoint's mesh (as after a remesh)."""
+    records, checkpoint = reference
+    coarse = quick_slit(*SCENE, "geometry.mesh_size=0.05")
+    stepper = PhaseFieldStepper(scene, mesh=PhaseFieldStepper(coarse).mesh)
+    state = load_checkpoint(checkpoint, scene)
+    restore(stepper, state)
+    assert MeshArrays.of(stepper.mesh).same_as(state.mesh_arrays)
+    record = stepper.step()  # one step here; the full continuation is the test above
+    for name in COMPARED:
+        assert getattr(record, name) == pytest.approx(getattr(records[record.step], name),
+                                                      rel=1e-10), name
+
+
+def test_output_keys_and_end_time_may_change(scene, reference):
+    _, checkpoint = reference
+    longer = quick_slit("time.t_end=0.5", "output.vtk_every=3", "output.history_every=2")
+    assert load_checkpoint(checkpoint, longer).k == CHECKPOINT_AT
+
+
+def test_restart_after_a_mesh_change(tmp_path):
+    """An adaptive run: the checkpoint holds a remeshed mesh and the adapter's memory."""
+    scene = quick_slit(*SCENE, "adaptivity.enabled=true", "adaptivity.every=2",
+                       "adaptivity.max_vertices=1500")
+    stepper = PhaseFieldStepper(scene)
+    reference = {}
+    while stepper.k < 8:
+        record = stepper.step()
+        reference[record.step] = record
+        if stepper.k == 3:
+            before = stepper.mesh
+            stepper.adapt()  # a mesh change between the start and the checkpoint
+            assert stepper.mesh is not before
+        if stepper.k == 5:
+            save_checkpoint(stepper, tmp_path / "checkpoint.h5")
+    restarted = resume(tmp_path / "checkpoint.h5", scene)
+    assert restarted.k == 5 and len(restarted.adaptations) == len(stepper.adaptations) >= 1
+    while restarted.k < 8:
+        record = restarted.step()
+        want = reference[record.step]
+        assert (record.nv, record.n_adapt) == (want.nv, want.n_adapt)
+        for name in (*COMPARED, "eta_total"):
+            assert getattr(record, name) == pytest.approx(getattr(want, name), rel=1e-10), \
+                f"step {record.step}: {name}"
+
+
+def test_adaptivity_state_round_trip(scene, reference, tmp_path):
+    """What decides the next mesh change (last tip, achieved sizes, eta) is restored."""
+    from types import SimpleNamespace
+
+    def with_adapter(stepper, tip, achieved, eta):
+        stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta)
+        stepper.adaptations = []
+        return stepper
+
+    state = load_checkpoint(reference[1], scene)
+    source = PhaseFieldStepper(scene, mesh=state.build_mesh())
+    restore(source, state)
+    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125)
+    save_checkpoint(source, tmp_path / "adaptive.h5")
+    target = with_adapter(PhaseFieldStepper(scene, mesh=state.build_mesh()), None, None, np.nan)
+    restore(target, load_checkpoint(tmp_path / "adaptive.h5", scene))
+    np.testing.assert_array_equal(target.adapter.last_tip, [0.31, 0.5])
+    assert target.adapter.achieved == (0.01, 0.004) and target.adapter.eta_total == 0.125
+    with pytest.raises(CheckpointError, match="disagree on whether the mesh adapts"):
+        restore(PhaseFieldStepper(scene, mesh=state.build_mesh()),
+                load_checkpoint(tmp_path / "adaptive.h5", scene))
+
+
+# -- bad input ---------------------------------------------------------------------------------
+def _expect_error(path, scene, fragment):
+    before = path.read_bytes() if path.exists() else None
+    with pytest.raises(CheckpointError, match=fragment) as info:
+        load_checkpoint(path, scene)
+    message = str(info.value)
+    assert len(message.splitlines()) == 1, message
+    assert (path.read_bytes() if path.exists() else None) == before  # left as it was
+    return message
+
+
+@pytest.fixture
+def copy_of_checkpoint(reference, tmp_path):
+    path = tmp_path / "checkpoint.h5"
+    path.write_bytes(reference[1].read_bytes())
+    return path
+
+
+def test_checkpoint_of_another_scene_is_refused(copy_of_checkpoint):
+    other = quick_slit(*SCENE, "phase_field.alpha2=2e-3")
+    message = _expect_error(copy_of_checkpoint, other, "written for another scene")
+    assert "phase_field.alpha2 = 0.001 there, 0.002 here" in message
+
+
+def test_missing_checkpoint(tmp_path, scene):
+    _expect_error(tmp_path / "nope.h5", scene, "does not exist")
+
+
+def test_garbage_checkpoint(tmp_path, scene):
+    path = tmp_path / "checkpoint.h5"
+    path.write_bytes(os.urandom(10_000))
+    _expect_error(path, scene, "is not an HDF5 file")
+
+
+def test_truncated_checkpoint(copy_of_checkpoint, scene):
+    data = copy_of_checkpoint.read_bytes()
+    copy_of_checkpoint.write_bytes(data[: len(data) // 2])
+    _expect_error(copy_of_checkpoint, scene, "truncated or corrupt")
+
+
+def test_flipped_bytes_in_a_field_are_detected(copy_of_checkpoint, scene):
+    with h5py.File(copy_of_checkpoint) as f:
+        offset = f["fields/z"].id.get_chunk_info(0).byte_offset
+    data = bytearray(copy_of_checkpoint.read_bytes())
+    data[offset + 64] ^= 0xFF
+    copy_of_checkpoint.write_bytes(bytes(data))
+    _expect_error(copy_of_checkpoint, scene, "truncated or corrupt")
+
+
+def test_newer_checkpoint_format(copy_of_checkpoint, scene):
+    with h5py.File(copy_of_checkpoint, "a") as f:
+        f.attrs["format_version"] = FORMAT_VERSION + 1
+    _expect_error(copy_of_checkpoint, scene, "newer than this ngfrac reads")
+
+
+def test_results_file_is_not_a_checkpoint(tmp_path, scene):
+    from ngfrac.results import ResultsWriter
+    path = tmp_path / "results.h5"
+    ResultsWriter(path, scene).close()
+    _expect_error(path, scene, "not an ngfrac checkpoint")
+
+
+def test_failed_write_keeps_the_previous_checkpoint(copy_of_checkpoint, scene, monkeypatch):
+    """A full disk: the write fails with a clear error; the old checkpoint stays usable."""
+    before = copy_of_checkpoint.read_bytes()
+
+    def disk_full(self, group):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(MeshArrays, "write", disk_full)
+    stepper = PhaseFieldStepper(scene)
+    with pytest.raises(CheckpointError, match="No space left on device.*previous checkpoint is "
+                                              "unchanged"):
+        save_checkpoint(stepper, copy_of_checkpoint)
+    assert copy_of_checkpoint.read_bytes() == before
+    assert not copy_of_checkpoint.with_suffix(".tmp").exists()
+
+
+# -- SIGKILL -----------------------------------------------------------------------------------
+CHILD = textwrap.dedent("""
+    import sys
+    import ngsolve as ngs
+    ngs.SetNumThreads(1)
+    sys.path.append({tests!r})
+    from scenes import quick_slit
+    from ngfrac.checkpoint import save_checkpoint
+    from ngfrac.stepper import PhaseFieldStepper
+
+    stepper = PhaseFieldStepper(quick_slit(*{scene!r}))
+    while True:  # killed by the test; would run on to the scene's end time
+        stepper.step(diagnose=False)
+        if stepper.k % 2 == 0:
+            save_checkpoint(stepper, {path!r})
+            print(stepper.k, flush=True)
+""")
+
+
+def test_sigkill_leaves_a_checkpoint_that_restarts_exactly(tmp_path, scene, reference):
+    records, _ = reference
+    path = tmp_path / "checkpoint.h5"
+    code = CHILD.format(tests=str(ROOT / "tests"), scene=SCENE, path=str(path))
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
+                             cwd=ROOT)
+    try:
+        for line in child.stdout:
+            if int(line) >= 6:
+                break
+        else:
+            pytest.fail(f"the child run ended early with status {child.wait()}")
+        # Kill at some moment of the following steps: often while a checkpoint is written.
+        time.sleep(0.05 + 0.3 * np.random.default_rng().random())
+    finally:
+        child.send_signal(signal.SIGKILL)
+        child.wait()
+    assert child.returncode == -signal.SIGKILL
+    stepper = resume(path, scene)
+    restarted_at = stepper.k
+    assert 6 <= restarted_at < N_STEPS and restarted_at % 2 == 0
+    _assert_same_history(_continue(stepper), records, restarted_at + 1)
