@@ -1,4 +1,5 @@
-"""Command line: ``ngfrac run SCENE.toml --out DIR`` and ``ngfrac check SCENE.toml``.
+"""Command line: ``ngfrac run SCENE.toml --out DIR``, ``ngfrac run --restart DIR``,
+``ngfrac plot DIR`` and ``ngfrac check SCENE.toml``.
 
 Bad input exits with status 2 and one line on stderr; no traceback.
 """
@@ -7,8 +8,11 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from pathlib import Path
 
+from .checkpoint import CheckpointError
 from .output import OutputError
+from .results import ResultsError
 from .scene import SceneError, load_scene
 from .stepper import SolverError
 
@@ -20,15 +24,21 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ngfrac", description="Phase-field crack propagation "
                                      "on adaptive NGSolve meshes.")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run a scene")
-    run.add_argument("scene", help="scene file (TOML)")
-    run.add_argument("--out", required=True, help="output folder")
+    run = sub.add_parser("run", help="run a scene, or continue one with --restart")
+    run.add_argument("scene", nargs="?", help="scene file (TOML)")
+    run.add_argument("--out", help="output folder (required unless --restart)")
+    run.add_argument("--restart", metavar="DIR", help="continue the run in DIR (or DIR/checkpoint.h5) "
+                     "from its last checkpoint; --set may extend time.t_end")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set time.t_end=0.05 (repeatable)")
     run.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--no-plots", action="store_true", help="skip history.png and crack.png")
     run.add_argument("-v", "--verbose", action="store_true", help="log at INFO level")
+    plot = sub.add_parser("plot", help="write the figures of a run folder into DIR/plots")
+    plot.add_argument("folder", help="a run folder written by ngfrac run")
+    plot.add_argument("--times", type=float, nargs="*", default=None,
+                      help="times of the phase-field pictures (default: first, middle, last snapshot)")
     check = sub.add_parser("check", help="validate a scene file and exit")
     check.add_argument("scene")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -45,7 +55,18 @@ def _run(args: argparse.Namespace) -> int:
 
     from .runner import run_scene
 
-    scene = load_scene(args.scene, args.overrides)
+    if bool(args.scene) == bool(args.restart):
+        raise SceneError("give a scene file to run, or --restart DIR to continue a run (not both)")
+    if args.restart:
+        folder = Path(args.restart)
+        folder = folder.parent if folder.suffix == ".h5" else folder
+        scene = load_scene(folder / "scene.toml", args.overrides)
+        out = folder
+    else:
+        if not args.out:
+            raise SceneError("--out DIR is required: the folder the run writes into")
+        scene = load_scene(args.scene, args.overrides)
+        out = Path(args.out)
     bar = tqdm(total=scene.time.n_steps, unit="step", disable=args.no_progress,
                desc=scene.name, dynamic_ncols=True)
     state = {"tip_x": float("nan")}
@@ -57,8 +78,9 @@ def _run(args: argparse.Namespace) -> int:
         bar.update(1)
 
     try:
-        summary = run_scene(scene, args.out, overwrite=args.overwrite, on_record=progress,
-                            plots=not args.no_plots)
+        summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
+                            plots=not args.no_plots, restart=bool(args.restart),
+                            on_start=lambda stepper: bar.update(stepper.k))
     finally:
         bar.close()
     last = summary.last
@@ -74,13 +96,19 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO if getattr(args, "verbose", False) else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
+        if args.command == "plot":
+            from .plotting import plot_run
+
+            for path in plot_run(args.folder, args.times):
+                print(path)
+            return 0
         if args.command == "check":
             scene = load_scene(args.scene, args.overrides)
             print(f"{args.scene}: scene {scene.name!r} is valid ({scene.time.n_steps} steps, "
                   f"model {scene.model.kind})")
             return 0
         return _run(args)
-    except (SceneError, OutputError) as err:
+    except (SceneError, OutputError, CheckpointError, ResultsError) as err:
         return _fail(str(err))
     except SolverError as err:
         return _fail(str(err), EXIT_SOLVER)

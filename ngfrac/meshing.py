@@ -418,7 +418,7 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
         if s_max > 1e6:
             raise ValueError(f"max_vertices={max_vertices} cannot be met by any size field")
     s = _bisect(lambda t: count(t * base) <= max_vertices, 1.0, s_max)
-    log.warning("vertex cap: the finest sizes had to grow by %.3g (h_lo %.3g -> %.3g)",
+    log.info("vertex cap: the finest sizes had to grow by %.3g (h_lo %.3g -> %.3g)",
                 s, h_lo, s * h_lo)
     return grade(s * base)
 

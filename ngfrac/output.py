@@ -16,7 +16,8 @@ from xml.sax.saxutils import quoteattr
 
 import ngsolve as ngs
 
-OWNED = ("history.csv", "scene.toml", "vtk", "history.png", "crack.png", "results.h5")
+OWNED = ("history.csv", "scene.toml", "vtk", "history.png", "crack.png", "results.h5",
+         "checkpoint.h5", "checkpoint.tmp", "force_displacement.png", "plots")
 """What ngfrac writes into a run folder (and may remove with ``overwrite``)."""
 
 
@@ -54,12 +55,27 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 
 class HistoryWriter:
-    """Appends one CSV row per diagnosed step; flushed each row so a killed run keeps its rows."""
+    """Appends one CSV row per diagnosed step; flushed each row so a killed run keeps its rows.
 
-    def __init__(self, path: Path, columns: list[str]) -> None:
+    With ``resume_after=k`` an existing file is kept up to step k (rows written after the
+    checkpoint a restart continues from are dropped) and new rows are appended.
+    """
+
+    def __init__(self, path: Path, columns: list[str], resume_after: int | None = None) -> None:
         self.path = path
         self.columns = columns
-        self._handle: TextIO = path.open("w", newline="")
+        if resume_after is not None and path.exists():
+            with path.open(newline="") as handle:
+                rows = list(csv.reader(handle))
+            if not rows or rows[0] != columns:
+                raise OutputError(f"{str(path)!r} does not have the columns of this run; "
+                                  "restart into the folder the run wrote")
+            kept = [rows[0]] + [row for row in rows[1:] if row and int(row[0]) <= resume_after]
+            atomic_write_text(path, "".join(",".join(row) + "\n" for row in kept))
+            self._handle: TextIO = path.open("a", newline="")
+            self._writer = csv.writer(self._handle)
+            return
+        self._handle = path.open("w", newline="")
         self._writer = csv.writer(self._handle)
         self._writer.writerow(columns)
 
@@ -100,6 +116,18 @@ class VTKSeries:
         self.stem = stem
         self.entries: list[tuple[float, str]] = []
         folder.mkdir(parents=True, exist_ok=True)
+
+    def resume(self, t: float) -> None:
+        """Keep the snapshots of an earlier run up to time ``t`` (for a restart)."""
+        import re
+
+        collection = self.folder / f"{self.stem}.pvd"
+        if not collection.exists():
+            return
+        pattern = re.compile(r'timestep="([^"]+)"[^>]*file="([^"]+)"')
+        entries = [(float(m.group(1)), m.group(2)) for m in pattern.finditer(collection.read_text())]
+        self.entries = [(time_, file) for time_, file in entries if time_ <= t * (1 + 1e-12) + 1e-300]
+        self._write_collection()
 
     def write(self, mesh: ngs.Mesh, fields: dict[str, Any], t: float) -> Path:
         """Write one snapshot of the named CoefficientFunctions on ``mesh`` at time ``t``."""

@@ -56,19 +56,86 @@ def plot_history(history_csv: str | Path, png: str | Path) -> Path:
 
 
 def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: str = "",
-                     show_mesh: bool = False) -> Path:
-    """The phase field z on the mesh (vertex values, linear per triangle)."""
+                     show_mesh: bool = False, path: np.ndarray | None = None) -> Path:
+    """The phase field z on the mesh (vertex values, linear per triangle).
+
+    ``mesh`` is an NGSolve mesh or a pair (coordinates, triangles); ``path`` an optional
+    (n, 2) array of tip positions drawn on top.
+    """
     plt = _pyplot()
-    coords = np.array(mesh.ngmesh.Coordinates())
-    triangles = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
+    if isinstance(mesh, tuple):
+        coords, triangles = np.asarray(mesh[0]), np.asarray(mesh[1])
+    else:
+        coords = np.array(mesh.ngmesh.Coordinates())
+        triangles = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
     fig, ax = plt.subplots(figsize=(6, 5.2), constrained_layout=True)
     image = ax.tripcolor(coords[:, 0], coords[:, 1], triangles, z_vertex_values,
                          shading="gouraud", cmap="inferno_r", vmin=0, vmax=1)
     if show_mesh:
         ax.triplot(coords[:, 0], coords[:, 1], triangles, color="0.6", lw=0.15)
+    if path is not None and len(path):
+        ax.plot(path[:, 0], path[:, 1], "c.-", lw=1, ms=3, label="tip path")
+        ax.legend(loc="upper left")
     fig.colorbar(image, ax=ax, label="z")
     ax.set_aspect("equal")
     ax.set(xlabel="x", ylabel="y", title=title)
     fig.savefig(png, dpi=130)
     plt.close(fig)
     return Path(png)
+
+
+def plot_force_displacement(history: dict[str, np.ndarray], png: str | Path) -> Path | None:
+    """Reaction force against the boundary's mean displacement, one curve per loaded component.
+
+    Returns None when the history has no force columns.
+    """
+    curves = [(name, "u" + name[1:]) for name in history
+              if name.startswith("F") and "_" in name and "u" + name[1:] in history]
+    curves = [(f, u) for f, u in curves if np.any(history[f] != 0)]
+    if not curves:
+        return None
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+    for force, displacement in curves:
+        ax.plot(history[displacement], history[force], label=f"{force} against {displacement}")
+    ax.set(xlabel="imposed displacement", ylabel="reaction force", title="Force-displacement")
+    ax.legend()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return Path(png)
+
+
+def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]:
+    """All figures of a run folder, into ``folder/plots``: history (energies, crack length and
+    tip, mesh size and vertex count: the paper's Fig. 3), force-displacement where the scene
+    has loads with reactions, and z with the tip path at chosen times (from results.h5)."""
+    from .results import open_results
+
+    folder = Path(folder)
+    if not (folder / "history.csv").exists():
+        raise ValueError(f"{str(folder)!r} is not a run folder (no history.csv)")
+    out = folder / "plots"
+    out.mkdir(exist_ok=True)
+    written = [plot_history(folder / "history.csv", out / "history.png")]
+    history = read_history(folder / "history.csv")
+    fd = plot_force_displacement(history, out / "force_displacement.png")
+    if fd is not None:
+        written.append(fd)
+    results_file = folder / "results.h5"
+    if results_file.exists():
+        results = open_results(results_file)
+        available = results.snapshot_times()
+        if len(available):
+            chosen = times if times else sorted({available[0], available[len(available) // 2], available[-1]})
+            tips = np.c_[history["tip_x"], history["tip_y"]]
+            for t in chosen:
+                snap = results.snapshot_at(t)
+                arrays = snap.arrays()
+                if arrays.coordinates.shape[1] != 2:
+                    continue  # 3D: use the VTK files
+                path = tips[(history["t"] <= snap.t) & np.all(np.isfinite(tips), axis=1)]
+                png = out / f"z_t{snap.t:.5g}.png"
+                plot_phase_field((arrays.coordinates, arrays.cells), arrays.values["z"], png,
+                                 title=f"z at t = {snap.t:.4g}", path=path)
+                written.append(png)
+    return written

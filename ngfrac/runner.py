@@ -1,17 +1,30 @@
-"""Run a scene into an output folder: the loop behind ``ngfrac run``."""
+"""Run a scene into an output folder: the loop behind ``ngfrac run``.
+
+A run folder holds ``scene.toml`` (the resolved scene), ``history.csv``, ``vtk/`` (a ``.pvd``
+series), ``results.h5`` (history and field snapshots with their meshes), ``checkpoint.h5``
+(written atomically every ``output.checkpoint_every`` steps) and the plots. ``restart=True``
+continues a folder from its checkpoint: rows and snapshots written after the checkpoint are
+dropped, so the continued history equals an uninterrupted one.
+"""
 from __future__ import annotations
 
 import logging
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .output import HistoryWriter, VTKSeries, atomic_write_text, prepare_output_dir, to_toml
-from .plotting import plot_history, plot_phase_field
+from .checkpoint import resume, save_checkpoint
+from .output import (HistoryWriter, OutputError, VTKSeries, atomic_write_text, prepare_output_dir,
+                     to_toml)
+from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
+from .results import ResultsWriter
 from .scene import Scene
 from .stepper import PhaseFieldStepper, StepRecord
 
 log = logging.getLogger(__name__)
+
+CHECKPOINT = "checkpoint.h5"
 
 
 @dataclass(frozen=True)
@@ -31,50 +44,97 @@ def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
     series.write(stepper.mesh, {"u": stepper.u, "z": stepper.z, "gamma": gamma}, stepper.t)
 
 
+def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
+    """history.png, crack.png (z with the tip path) and force_displacement.png (if any)."""
+    import numpy as np
+
+    plot_history(out / "history.csv", out / "history.png")
+    history = read_history(out / "history.csv")
+    tips = np.c_[history["tip_x"], history["tip_y"]]
+    z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
+    plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
+                     title=f"{stepper.scene.name}: z at t = {stepper.t:.4g}",
+                     path=tips[np.all(np.isfinite(tips), axis=1)])
+    plot_force_displacement(history, out / "force_displacement.png")
+
+
+def _start(scene: Scene, out: Path, overwrite: bool, restart: bool) -> PhaseFieldStepper:
+    if restart:
+        checkpoint = out / CHECKPOINT
+        if not checkpoint.exists():
+            raise OutputError(f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
+                              "(written every output.checkpoint_every steps)")
+        return resume(checkpoint, scene)
+    prepare_output_dir(out, overwrite)
+    atomic_write_text(out / "scene.toml", to_toml(scene.to_dict()))
+    return PhaseFieldStepper(scene)
+
+
 def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
               on_record: Callable[[StepRecord], None] | None = None,
               plots: bool = True,
-              on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
-    """Run ``scene`` to its end time, writing history, VTK, the scene copy and plots.
+              on_step: Callable[[PhaseFieldStepper], None] | None = None,
+              restart: bool = False,
+              on_start: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
+    """Run ``scene`` to its end time, writing history, VTK, results, checkpoints and plots.
 
     Parameters
     ----------
     scene : Scene
     out_dir : path of the run folder
-    overwrite : replace an earlier run in that folder
+    overwrite : replace an earlier run in that folder (only the files ngfrac writes)
     on_record : called with every step record (the CLI's progress bar)
     plots : write history.png and crack.png at the end
     on_step : called with the stepper after set-up and after every step (for checks in tests)
+    restart : continue the run in ``out_dir`` from its checkpoint
+    on_start : called once with the stepper before the first step (e.g. to place a progress bar)
     """
-    out = prepare_output_dir(out_dir, overwrite)
-    atomic_write_text(out / "scene.toml", to_toml(scene.to_dict()))
-    stepper = PhaseFieldStepper(scene)
-    subdivision = scene.output.vtk_subdivision
-    if subdivision < 0:
-        subdivision = scene.discretization.order - 1
+    out = Path(out_dir)
+    stepper = _start(scene, out, overwrite, restart)
+    if on_start is not None:
+        on_start(stepper)
+    output = scene.output
+    subdivision = output.vtk_subdivision if output.vtk_subdivision >= 0 else scene.discretization.order - 1
     series = VTKSeries(out / "vtk", subdivision)
-    vtk_every = scene.output.vtk_every
     record = stepper.record()
     if on_step is not None:
         on_step(stepper)
-    with HistoryWriter(out / "history.csv", record.header()) as history:
-        history.write(record.row())
-        if vtk_every:
-            write_snapshot(series, stepper)
+    with ExitStack() as stack:
+        history = stack.enter_context(HistoryWriter(out / "history.csv", record.header(),
+                                                    resume_after=stepper.k if restart else None))
+        results = None
+        if output.results:
+            results = (ResultsWriter.resume(out / "results.h5", scene, stepper.k) if restart
+                       else ResultsWriter(out / "results.h5", scene, overwrite=overwrite))
+            stack.callback(results.close)
+        if restart:
+            series.resume(stepper.t)
+        else:
+            history.write(record.row())
+            if results is not None:
+                results.append(record)
+            if output.vtk_every:
+                write_snapshot(series, stepper)
+                if results is not None:
+                    results.write_snapshot(stepper)
         for record in stepper.run():
             if record.has_diagnostics:
                 history.write(record.row())
+                if results is not None:
+                    results.append(record)
             last = record.step == stepper.n_steps
-            if (vtk_every and record.step % vtk_every == 0) or last:
+            if (output.vtk_every and record.step % output.vtk_every == 0) or last:
                 write_snapshot(series, stepper)
+                if results is not None:
+                    results.write_snapshot(stepper)
+            # after the other writes, so a restart's "drop what came after k" stays consistent
+            if output.checkpoint_every and record.step % output.checkpoint_every == 0:
+                save_checkpoint(stepper, out / CHECKPOINT)
             if on_record is not None:
                 on_record(record)
             if on_step is not None:
                 on_step(stepper)
     if plots:
-        plot_history(out / "history.csv", out / "history.png")
-        z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
-        plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
-                         title=f"{scene.name}: z at t = {stepper.t:.4g}")
+        write_plots(out, stepper)
     log.info("run %s finished at t=%g in %.1f s", scene.name, record.t, record.wall_s)
     return RunSummary(out, record, len(series.entries))

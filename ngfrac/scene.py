@@ -389,6 +389,10 @@ class Output(_Section):
     history_every: int = 1
     vtk_subdivision: int = -1
     """Subdivision of each element in VTK files; -1 means order - 1."""
+    checkpoint_every: int = 50
+    """A checkpoint (checkpoint.h5, written atomically) every N steps; 0 = never."""
+    results: bool = True
+    """Write results.h5 (history and field snapshots with their meshes, at the VTK steps)."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -396,6 +400,8 @@ class Output(_Section):
         _require(self.history_every >= 1, s, "history_every", self.history_every, "must be >= 1")
         _require(-1 <= self.vtk_subdivision <= 5, s, "vtk_subdivision", self.vtk_subdivision,
                  "must be in -1..5 (-1 = order - 1)")
+        _require(self.checkpoint_every >= 0, s, "checkpoint_every", self.checkpoint_every,
+                 "must be >= 0 (0 = never)")
 
 
 @dataclass(frozen=True)

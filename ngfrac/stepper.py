@@ -44,8 +44,8 @@ class StepRecord:
     """What one step reports. Diagnostic fields are NaN on steps that skip diagnostics.
 
     ``eta_total`` is the estimator total of the last adaptation, ``n_adapt`` the number of
-    mesh changes so far, ``step_s`` the wall time of this step and ``adapt_s`` the part of it
-    spent changing the mesh.
+    mesh changes so far, ``step_s`` the wall time of this step, ``solve_s`` the part in the two
+    sub-steps (assembly and linear solves) and ``adapt_s`` the part spent changing the mesh.
     """
 
     step: int
@@ -66,6 +66,7 @@ class StepRecord:
     eta_total: float = math.nan
     n_adapt: int = 0
     step_s: float = math.nan
+    solve_s: float = math.nan
     adapt_s: float = 0.0
     forces: dict[str, float] = field(default_factory=dict)
     """Reaction force and mean displacement per loaded boundary: ``Fx_top``, ``ux_top``, ..."""
@@ -321,10 +322,14 @@ class PhaseFieldStepper:
         self.time.Set(self.t)
         with ngs.TaskManager():
             self.u_prev.vec.data = self.u.vec
+            solve_started = time.perf_counter()
             self.solve_u()
+            solve_s = time.perf_counter() - solve_started
             if diagnose:  # before z changes and before any new mesh: the residual of this solve
                 self.forces = reaction_columns(self)
+            solve_started = time.perf_counter()
             iterations = self._solve_z()
+            solve_s += time.perf_counter() - solve_started
             old = self.nodes.values(self.z)
             trial = self.nodes.values(self.z_trial)
             new = np.minimum(1.0, np.maximum(trial, old))
@@ -339,16 +344,17 @@ class PhaseFieldStepper:
                     self.adapt(tip)
             adapt_s = time.perf_counter() - adapt_started
         return self.record(diagnose, dz_max=dz_max, z_iterations=iterations,
-                           step_s=time.perf_counter() - started, adapt_s=adapt_s)
+                           step_s=time.perf_counter() - started, solve_s=solve_s, adapt_s=adapt_s)
 
     def record(self, diagnose: bool = True, dz_max: float = math.nan, z_iterations: int = 0,
-               step_s: float = math.nan, adapt_s: float = 0.0) -> StepRecord:
+               step_s: float = math.nan, solve_s: float = math.nan,
+               adapt_s: float = 0.0) -> StepRecord:
         """A record of the current state (diagnostics only when asked for)."""
         eta_total = self.adapter.eta_total if self.adapter is not None else math.nan
         base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self._started,
                     nv=self.mesh.nv, ndof=self.fes_u.ndof + self.fes_z.ndof,
                     dz_max=dz_max, z_iterations=z_iterations, eta_total=eta_total,
-                    n_adapt=len(self.adaptations), step_s=step_s, adapt_s=adapt_s)
+                    n_adapt=len(self.adaptations), step_s=step_s, solve_s=solve_s, adapt_s=adapt_s)
         if not diagnose:
             return StepRecord(**base)
         pf = self.scene.phase_field

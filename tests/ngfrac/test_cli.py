@@ -56,3 +56,40 @@ def test_run_writes_outputs_and_refuses_to_overwrite(tmp_path):
     assert again.returncode == 2 and "--overwrite" in again.stderr
     assert (out / "history.csv").read_text() == before  # nothing lost
     assert ngfrac("run", SLIT, "--out", str(out), "--overwrite", *QUICK).returncode == 0
+
+
+def test_restart_continues_a_killed_run_exactly(tmp_path):
+    """Run 6 steps with a checkpoint at 4; continue from it to 8 steps, compare with 8 straight."""
+    common = ["--set", "phase_field.epsilon=0.08", "--set", "geometry.mesh_size=0.04",
+              "--set", "adaptivity.enabled=false", "--set", "output.checkpoint_every=4",
+              "--no-progress", "--no-plots"]
+    straight, broken = tmp_path / "straight", tmp_path / "broken"
+    assert ngfrac("run", SLIT, "--out", str(straight), "--set", "time.t_end=0.004", *common).returncode == 0
+    assert ngfrac("run", SLIT, "--out", str(broken), "--set", "time.t_end=0.003", *common).returncode == 0
+    again = ngfrac("run", "--restart", str(broken), "--set", "time.t_end=0.004", *common[-2:])
+    assert again.returncode == 0, again.stderr
+    a = (straight / "history.csv").read_text().splitlines()
+    b = (broken / "history.csv").read_text().splitlines()
+    assert len(a) == len(b) == 10
+    cols = a[0].split(",")
+    keep = [i for i, c in enumerate(cols) if c not in ("wall_s", "step_s", "solve_s", "adapt_s")]
+    for row_a, row_b in zip(a[1:], b[1:]):
+        va, vb = row_a.split(","), row_b.split(",")
+        for i in keep:
+            x, y = float(va[i]), float(vb[i])
+            assert x == pytest.approx(y, rel=1e-9, abs=1e-14, nan_ok=True), (cols[i], x, y)
+
+
+def test_restart_without_checkpoint_is_a_clear_error(tmp_path):
+    result = ngfrac("run", "--restart", str(tmp_path))
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+
+
+def test_plot_command(tmp_path):
+    out = tmp_path / "run"
+    assert ngfrac("run", SLIT, "--out", str(out), *QUICK).returncode == 0
+    result = ngfrac("plot", str(out))
+    assert result.returncode == 0, result.stderr
+    assert (out / "plots" / "history.png").exists()
+    assert list((out / "plots").glob("z_t*.png"))
