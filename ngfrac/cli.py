@@ -34,6 +34,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--no-plots", action="store_true", help="skip history.png and crack.png")
+    run.add_argument("--profile", action="store_true", help="print the wall time of each phase at the end")
     run.add_argument("-v", "--verbose", action="store_true", help="log at INFO level")
     plot = sub.add_parser("plot", help="write the figures of a run folder into DIR/plots")
     plot.add_argument("folder", help="a run folder written by ngfrac run")
@@ -87,6 +88,8 @@ def _run(args: argparse.Namespace) -> int:
     print(f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
           f"crack length {last.crack_length:.4f}, tip ({last.tip_x:.3f}, {last.tip_y:.3f}); "
           f"results in {summary.out_dir}")
+    if args.profile:
+        print(summary.profile)
     return 0
 
 

@@ -9,6 +9,7 @@ dropped, so the continued history equals an uninterrupted one.
 from __future__ import annotations
 
 import logging
+import time
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,6 +35,8 @@ class RunSummary:
     out_dir: Path
     last: StepRecord
     n_snapshots: int
+    profile: str = ""
+    """The per-phase timing table (see :class:`ngfrac.profiling.PhaseTimer`)."""
 
 
 def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
@@ -89,8 +92,10 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     restart : continue the run in ``out_dir`` from its checkpoint
     on_start : called once with the stepper before the first step (e.g. to place a progress bar)
     """
+    started = time.perf_counter()
     out = Path(out_dir)
     stepper = _start(scene, out, overwrite, restart)
+    stepper.timer.add("set-up (mesh, spaces, z0, u0)", time.perf_counter() - started)
     if on_start is not None:
         on_start(stepper)
     output = scene.output
@@ -117,24 +122,30 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                 write_snapshot(series, stepper)
                 if results is not None:
                     results.write_snapshot(stepper)
+        timer = stepper.timer
         for record in stepper.run():
             if record.has_diagnostics:
-                history.write(record.row())
-                if results is not None:
-                    results.append(record)
+                with timer.phase("output: history"):
+                    history.write(record.row())
+                    if results is not None:
+                        results.append(record)
             last = record.step == stepper.n_steps
             if (output.vtk_every and record.step % output.vtk_every == 0) or last:
-                write_snapshot(series, stepper)
-                if results is not None:
-                    results.write_snapshot(stepper)
+                with timer.phase("output: VTK and snapshots"):
+                    write_snapshot(series, stepper)
+                    if results is not None:
+                        results.write_snapshot(stepper)
             # after the other writes, so a restart's "drop what came after k" stays consistent
             if output.checkpoint_every and record.step % output.checkpoint_every == 0:
-                save_checkpoint(stepper, out / CHECKPOINT)
+                with timer.phase("output: checkpoint"):
+                    save_checkpoint(stepper, out / CHECKPOINT)
             if on_record is not None:
                 on_record(record)
             if on_step is not None:
                 on_step(stepper)
     if plots:
-        write_plots(out, stepper)
+        with stepper.timer.phase("output: plots"):
+            write_plots(out, stepper)
     log.info("run %s finished at t=%g in %.1f s", scene.name, record.t, record.wall_s)
-    return RunSummary(out, record, len(series.entries))
+    wall = time.perf_counter() - started
+    return RunSummary(out, record, len(series.entries), stepper.timer.table(total=wall))

@@ -360,7 +360,7 @@ class Discretization(_Section):
     order: int = 2
     order_z: int = 0
     u_solver: str = "sparsecholesky"
-    z_solver: str = "cg"
+    z_solver: str = "sparsecholesky"
     coupling: str = "paper"
 
     def validate(self) -> None:

@@ -28,6 +28,7 @@ from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
 from .models import make_model
 from .nodal import LagrangeNodes
+from .profiling import PhaseTimer
 from .reactions import reaction_columns
 from .scene import Scene
 from .transfer import crack_length, transfer, transfer_phase_field
@@ -109,6 +110,7 @@ class PhaseFieldStepper:
         self.scene = scene
         self.model = make_model(scene)
         self.k = 0
+        self.timer = PhaseTimer()
         self.time = ngs.Parameter(0.0)
         self._started = time.perf_counter()
         self._polylines = [crack.points for crack in scene.cracks]
@@ -237,6 +239,8 @@ class PhaseFieldStepper:
         self.u.vec.data = transfer(u_old, self.fes_u, method=method).vec
         self.u_prev.vec.data = self.u.vec
         times["transfer_s"] = time.perf_counter() - started
+        for name, seconds in times.items():
+            self.timer.add(f"adapt: {name[:-2]}", seconds)
         self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), tip)
         record = Adaptation(step=self.k, nv_before=nv_before, nv_after=self.mesh.nv,
                             eta_total=self.adapter.eta_total, crack_length_before=length_before,
@@ -263,30 +267,43 @@ class PhaseFieldStepper:
 
     def solve_u(self) -> None:
         """The u-sub-step for the current z (z^{k-1} inside a step) and the current time."""
-        self.a_u.Assemble()
-        if self._inv_u is None:
-            self._inv_u = self.a_u.mat.Inverse(self.fes_u.FreeDofs(),
-                                               inverse=self.scene.discretization.u_solver)
-        else:
-            self._inv_u.Update()
-        self._apply_boundary_values()
-        residual = self.u.vec.CreateVector()
-        if self.m_u is not None:
-            residual.data = self.m_u.mat * self.u_prev.vec - self.a_u.mat * self.u.vec
-        else:
-            residual.data = -self.a_u.mat * self.u.vec
-        if self.f_u is not None:
-            self.f_u.Assemble()
-            residual.data += self.f_u.vec
-        self.u.vec.data += self._inv_u * residual
+        with self.timer.phase("u: assemble"):
+            self.a_u.Assemble()
+            if self.f_u is not None:
+                self.f_u.Assemble()
+        with self.timer.phase("u: factorize"):
+            if self._inv_u is None:
+                self._inv_u = self.a_u.mat.Inverse(self.fes_u.FreeDofs(),
+                                                   inverse=self.scene.discretization.u_solver)
+            else:
+                self._inv_u.Update()
+        with self.timer.phase("u: solve"):
+            self._apply_boundary_values()
+            residual = self.u.vec.CreateVector()
+            if self.m_u is not None:
+                residual.data = self.m_u.mat * self.u_prev.vec - self.a_u.mat * self.u.vec
+            else:
+                residual.data = -self.a_u.mat * self.u.vec
+            if self.f_u is not None:
+                residual.data += self.f_u.vec
+            self.u.vec.data += self._inv_u * residual
         if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
             raise SolverError(f"the u-solve gave non-finite values at step {self.k} (t={self.t:g}); "
                               "raise phase_field.residual_stiffness or lower time.dt")
 
     def _solve_z(self) -> int:
         """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
-        self.a_z.Assemble()
-        self.f_z.Assemble()
+        with self.timer.phase("z: assemble"):
+            self.a_z.Assemble()
+            self.f_z.Assemble()
+        with self.timer.phase("z: solve"):
+            iterations = self._solve_z_system()
+        if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
+            raise SolverError(f"the z-solve gave non-finite values at step {self.k} (t={self.t:g}); "
+                              "lower time.dt")
+        return iterations
+
+    def _solve_z_system(self) -> int:
         solver = self.scene.discretization.z_solver
         iterations = 0
         if solver == "cg":
@@ -304,9 +321,6 @@ class PhaseFieldStepper:
             else:
                 self._inv_z.Update()
             self.z_trial.vec.data = self._inv_z * self.f_z.vec
-        if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
-            raise SolverError(f"the z-solve gave non-finite values at step {self.k} (t={self.t:g}); "
-                              "lower time.dt")
         return iterations
 
     def step(self, diagnose: bool = True) -> StepRecord:
@@ -326,20 +340,24 @@ class PhaseFieldStepper:
             self.solve_u()
             solve_s = time.perf_counter() - solve_started
             if diagnose:  # before z changes and before any new mesh: the residual of this solve
-                self.forces = reaction_columns(self)
+                with self.timer.phase("diagnostics: reactions"):
+                    self.forces = reaction_columns(self)
             solve_started = time.perf_counter()
             iterations = self._solve_z()
             solve_s += time.perf_counter() - solve_started
-            old = self.nodes.values(self.z)
-            trial = self.nodes.values(self.z_trial)
-            new = np.minimum(1.0, np.maximum(trial, old))
-            self.nodes.assign(self.z, new)
+            with self.timer.phase("z: bounds at nodes"):
+                old = self.nodes.values(self.z)
+                trial = self.nodes.values(self.z_trial)
+                new = np.minimum(1.0, np.maximum(trial, old))
+                self.nodes.assign(self.z, new)
         dz_max = float(np.max(new - old)) if len(new) else 0.0
         adapt_s = 0.0
         if self.adapter is not None and self.k % self.scene.adaptivity.every == 0:
             adapt_started = time.perf_counter()
-            tip = self.tip()
-            if self.adapter.wants_new_mesh(self.mesh, self.nodes, new, tip):
+            with self.timer.phase("adapt: check"):
+                tip = self.tip()
+                wanted = self.adapter.wants_new_mesh(self.mesh, self.nodes, new, tip)
+            if wanted:
                 with ngs.TaskManager():
                     self.adapt(tip)
             adapt_s = time.perf_counter() - adapt_started
@@ -358,7 +376,7 @@ class PhaseFieldStepper:
         if not diagnose:
             return StepRecord(**base)
         pf = self.scene.phase_field
-        with ngs.TaskManager():
+        with ngs.TaskManager(), self.timer.phase("diagnostics: energies, tip"):
             e = energies(self.mesh, self.z, self.model.energy_density(self.u), self.gamma,
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
