@@ -63,6 +63,10 @@ class CheckpointState:
     mesh_arrays: MeshArrays
     fields: dict[str, StoredField]
     adapter: dict[str, Any] | None = None
+    ticks: int = 0
+    """Time as a count of time.dt (t = ticks * dt)."""
+    level: int = 0
+    """The adaptive step level (step = dt * 2**level)."""
 
     def build_mesh(self) -> ngs.Mesh:
         """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.results`)."""
@@ -83,6 +87,8 @@ def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
             f.attrs["format"] = FORMAT
             f.attrs["format_version"] = FORMAT_VERSION
             f.attrs["k"] = int(stepper.k)
+            f.attrs["ticks"] = int(stepper.ticks)
+            f.attrs["level"] = int(stepper.level)
             f.attrs["t"] = float(stepper.t)
             f.attrs["scene_hash"] = scene_hash(stepper.scene)
             write_scene(f, stepper.scene)
@@ -149,6 +155,8 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
             check_format(f, path, FORMAT, FORMAT_VERSION, "checkpoint", CheckpointError)
             stored, _ = read_scene(f, path, CheckpointError)
             k, t = int(f.attrs["k"]), float(f.attrs["t"])
+            ticks = int(f.attrs.get("ticks", k))
+            level = int(f.attrs.get("level", 0))
             mesh = MeshArrays.read(f["mesh"])
             fields = {name: StoredField.read(f["fields"][name]) for name in FIELDS}
             adapter = _read_adapter(f["adapter"]) if "adapter" in f else None
@@ -162,7 +170,7 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
                               "restart with the scene it was written for")
     if k < 0 or not math.isfinite(t):
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt (step {k}, time {t})")
-    return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter)
+    return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter, ticks, level)
 
 
 def _read_adapter(group: h5py.Group) -> dict[str, Any]:
@@ -193,6 +201,8 @@ def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
                                   f"{stored.describe()}, the stepper's is {mine.describe()}")
         gf.vec.FV().NumPy()[:] = stored.values
     stepper.k = state.k
+    stepper.ticks = state.ticks
+    stepper.level = state.level
     stepper.time.Set(stepper.t)
     _restore_adapter(stepper, state)
 

@@ -68,7 +68,8 @@ def _run(args: argparse.Namespace) -> int:
             raise SceneError("--out DIR is required: the folder the run writes into")
         scene = load_scene(args.scene, args.overrides)
         out = Path(args.out)
-    bar = tqdm(total=scene.time.n_steps, unit="step", disable=args.no_progress,
+    dt = scene.time.dt
+    bar = tqdm(total=scene.time.n_ticks, unit="dt", disable=args.no_progress,
                desc=scene.name, dynamic_ncols=True)
     state = {"tip_x": float("nan")}
 
@@ -76,12 +77,12 @@ def _run(args: argparse.Namespace) -> int:
         if record.has_diagnostics:
             state["tip_x"] = record.tip_x
         bar.set_postfix(t=f"{record.t:.4g}", nv=record.nv, tip_x=f"{state['tip_x']:.3f}", refresh=False)
-        bar.update(1)
+        bar.update(round(record.t / dt) - bar.n)
 
     try:
         summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
                             plots=not args.no_plots, restart=bool(args.restart),
-                            on_start=lambda stepper: bar.update(stepper.k))
+                            on_start=lambda stepper: bar.update(stepper.ticks))
     finally:
         bar.close()
     last = summary.last

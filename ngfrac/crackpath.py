@@ -10,6 +10,10 @@ The kink angle is the direction of a least-squares line through the initial tip 
 path points between two radii (a few epsilon beyond the tip, outside the initial band),
 measured from the direction of the initial crack's last segment, counter-clockwise positive.
 
+A reference LEFM solution (:func:`sharp_crack_solution`) cuts the first initial crack of a scene
+open (a slit from the left edge) and solves linear elasticity on a mesh graded at its tip;
+:func:`sharp_crack_sifs` then reads K_I, K_II off the crack-face displacement jump.
+
 The prediction (:func:`mts_kink_angle`): for stress intensity factors K_I > 0, K_II, the
 maximum-hoop-stress criterion (Erdogan-Sih) kinks by theta with
 ``K_I sin(theta) + K_II (3 cos(theta) - 1) = 0``, i.e.
@@ -26,7 +30,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 __all__ = ["CrackPath", "initial_tip", "ridge_path", "history_path", "fit_direction",
-           "kink_angle", "mts_kink_angle", "measure_kink", "deviation_from_line"]
+           "kink_angle", "stress_intensity_from_jump", "mts_kink_angle", "measure_kink",
+           "deviation_from_line", "slit_mesh", "SharpCrack", "sharp_crack_solution",
+           "griffith_onset"]
 
 
 @dataclass(frozen=True)
@@ -124,14 +130,24 @@ def ridge_path(mesh, z, origin: Sequence[float], reference: Sequence[float],
 
 
 def history_path(history: Mapping[str, np.ndarray], origin: Sequence[float],
-                 reference: Sequence[float]) -> CrackPath:
-    """The tip positions of a history (``tip_x``, ``tip_y``) as a path, in order of distance
-    from the initial tip; rows without a tip and repeated positions are dropped."""
+                 reference: Sequence[float], max_jump: float = math.inf) -> CrackPath:
+    """The tip positions of a history (``tip_x``, ``tip_y``) as a path.
+
+    Rows without a tip and positions at the initial tip are dropped. The history's tip is the
+    cracked point farthest from the initial crack, so when damage elsewhere (a loaded corner)
+    reaches z = 1/2 it jumps there: the track ends before the first move longer than
+    ``max_jump``. Points are returned in order of distance from the initial tip, repeats removed.
+    """
     origin = np.asarray(origin, dtype=float)
     points = np.column_stack([history["tip_x"], history["tip_y"]])
     points = points[np.all(np.isfinite(points), axis=1)]
-    moved = np.linalg.norm(points - origin, axis=1) > 0
-    points = np.unique(points[moved], axis=0)
+    points = points[np.linalg.norm(points - origin, axis=1) > 0]
+    if len(points):
+        moves = np.linalg.norm(np.diff(np.vstack([origin, points]), axis=0), axis=1)
+        jumps = np.flatnonzero(moves > max_jump)
+        if len(jumps):
+            points = points[:jumps[0]]
+    points = np.unique(points, axis=0)
     order = np.argsort(np.linalg.norm(points - origin, axis=1))
     reference = np.asarray(reference, dtype=float)
     return CrackPath(origin, reference / np.linalg.norm(reference), points[order])
@@ -154,6 +170,27 @@ def kink_angle(path: CrackPath, rmin: float, rmax: float) -> float:
     ``rmax`` from the initial tip, relative to the initial crack (counter-clockwise > 0)."""
     direction = fit_direction(path.between(rmin, rmax))
     return float(_relative_degrees(direction, path.reference)[0])
+
+
+def stress_intensity_from_jump(distance: np.ndarray, jump: np.ndarray, mu: float, kappa: float,
+                               degree: int = 2) -> tuple[float, float]:
+    """K_I and K_II from the crack-face displacement jump behind a tip (LEFM, plane problems).
+
+    Near the tip ``[u_n] = (kappa + 1)/mu K_I sqrt(r/(2 pi))`` and ``[u_t]`` the same with K_II
+    (jump = upper face minus lower face, in the crack's normal n and tangent t); the apparent
+    K(r) = mu/(kappa + 1) sqrt(2 pi/r) [u] is fitted by a polynomial in r and taken at r = 0.
+
+    Parameters
+    ----------
+    distance : (m,) distances r behind the tip
+    jump : (m, 2) jumps (tangential, normal) at those distances
+    mu, kappa : shear modulus and Kolosov constant (plane strain: 3 - 4 nu)
+    """
+    r = np.asarray(distance, dtype=float)
+    apparent = mu / (kappa + 1) * np.sqrt(2 * np.pi / r)[:, None] * np.asarray(jump, dtype=float)
+    k2 = np.polyfit(r, apparent[:, 0], degree)[-1]
+    k1 = np.polyfit(r, apparent[:, 1], degree)[-1]
+    return float(k1), float(k2)
 
 
 def mts_kink_angle(k1: float, k2: float) -> float:
@@ -190,3 +227,150 @@ def deviation_from_line(path: CrackPath, angle: float) -> np.ndarray:
     direction = np.array([math.cos(a), math.sin(a)])
     offsets = path.points - path.origin
     return direction[0] * offsets[:, 1] - direction[1] * offsets[:, 0]
+
+
+def slit_mesh(geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
+              opening: float = 1e-6):
+    """A mesh of the rectangle with a straight crack from its left edge cut open.
+
+    The faces (boundary ``crack``) meet at the tip and are ``2 opening`` apart at the mouth, a
+    wedge too thin to matter; elements are graded to ``h_tip`` at the tip (at most 0.3 times
+    the distance to it). The sides keep their names bottom, right, top, left.
+    """
+    import ngsolve as ngs
+    from netgen.geom2d import SplineGeometry
+
+    x0, y0 = geometry.origin
+    x1, y1 = x0 + geometry.width, y0 + geometry.height
+    mouth, tip = np.asarray(crack[0], dtype=float), np.asarray(crack[-1], dtype=float)
+    if len(crack) != 2 or abs(mouth[0] - x0) > 1e-12 or not y0 < mouth[1] < y1:
+        raise ValueError("slit_mesh handles one straight crack from the left edge")
+    geo = SplineGeometry()
+    outline = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, mouth[1] + opening), tuple(tip),
+               (x0, mouth[1] - opening)]
+    points = [geo.AppendPoint(*p) for p in outline]
+    names = ["bottom", "right", "top", "left", "crack", "crack", "left"]
+    coarse = min(geometry.width, geometry.height) / 20
+    for i, name in enumerate(names):
+        geo.Append(["line", points[i], points[(i + 1) % len(points)]], bc=name,
+                   maxh=min(coarse, 0.01) if name == "crack" else coarse)
+    mesh = ngs.Mesh(geo.GenerateMesh(maxh=coarse))
+    for _ in range(60):
+        coords = np.array(mesh.ngmesh.Coordinates())[:, :2]
+        corners = coords[mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1]
+        size = np.max([np.linalg.norm(corners[:, i] - corners[:, j], axis=1)
+                       for i, j in ((0, 1), (1, 2), (2, 0))], axis=0)
+        distance = np.linalg.norm(corners.mean(axis=1) - tip, axis=1)
+        marked = size > np.maximum(h_tip, 0.3 * distance)
+        if not marked.any():
+            break
+        for element, flag in zip(mesh.Elements(ngs.VOL), marked):
+            mesh.SetRefinementFlag(element, bool(flag))
+        mesh.Refine()
+    return mesh
+
+
+@dataclass(frozen=True)
+class SharpCrack:
+    """LEFM solution of a scene with its first crack cut open, at one time t.
+
+    ``K_I``, ``K_II`` from the crack-face jump; ``energy`` = 1/2 int sigma:e; ``reactions``
+    maps ``F<c>_<boundary>`` to the force on each loaded boundary (the integral of the
+    traction, from the residual as in :mod:`ngfrac.reactions`); ``G`` = (K_I^2 + K_II^2)/E'.
+    """
+
+    K_I: float
+    K_II: float
+    G: float
+    energy: float
+    reactions: dict
+
+    @property
+    def kink_deg(self) -> float:
+        """The maximum-hoop-stress kink angle (degrees)."""
+        return mts_kink_angle(self.K_I, self.K_II)
+
+
+def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
+                         fit_range: tuple[float, float] = (0.005, 0.05)) -> SharpCrack:
+    """Linear elasticity (no phase field) with the scene's loads at time ``t`` on
+    :func:`slit_mesh`; plane strain or plane stress.
+
+    K_I, K_II come from :func:`stress_intensity_from_jump` with the jump between
+    ``fit_range`` behind the tip. For loads linear in t, K and the forces scale with t and
+    G and the energy with t^2.
+    """
+    import ngsolve as ngs
+
+    from .models import make_model
+
+    model = make_model(scene)
+    if model.n_components != 2:
+        raise ValueError("sharp_crack_solution is for the plane models")
+    crack = scene.cracks[0].points
+    mesh = slit_mesh(scene.geometry, crack, h_tip)
+    fes = model.space(mesh, order, scene.loads)
+    u, v = fes.TnT()
+    a = ngs.BilinearForm(model.stress_strain(u, v) * ngs.dx, symmetric=True)
+    gfu = ngs.GridFunction(fes)
+    model.set_boundary(gfu, model.boundary_values(mesh, scene.loads, ngs.Parameter(t)))
+    free = np.array(fes.FreeDofs(), dtype=bool)
+    gfu.vec.FV().NumPy()[free] = 0.0
+    with ngs.TaskManager():
+        a.Assemble()
+        residual = (-a.mat * gfu.vec).Evaluate()
+        gfu.vec.data += a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky") * residual
+        residual.data = a.mat * gfu.vec
+    reactions = {}
+    for load in scene.loads:
+        for i, (c, is_free) in enumerate(zip(model.component_names, load.free)):
+            if is_free:
+                reactions[f"F{c}_{load.boundary}"] = 0.0
+                continue
+            w = ngs.GridFunction(fes)
+            w.components[i].Set(1.0, ngs.BND, definedon=mesh.Boundaries(load.boundary))
+            w.vec.FV().NumPy()[free] = 0.0
+            reactions[f"F{c}_{load.boundary}"] = float(ngs.InnerProduct(residual, w.vec))
+    energy = 0.5 * ngs.Integrate(model.energy_density(gfu), mesh, order=2 * order)
+    mouth, tip = np.asarray(crack[0], dtype=float), np.asarray(crack[-1], dtype=float)
+    tangent = (tip - mouth) / np.linalg.norm(tip - mouth)
+    normal = np.array([-tangent[1], tangent[0]])
+    r = np.linspace(*fit_range, 30)
+    gap = 2e-6
+
+    def at(points):
+        return np.array([gfu(mesh(*p)) for p in points])
+
+    behind = tip - r[:, None] * tangent
+    jump = at(behind + gap * normal) - at(behind - gap * normal)
+    jump_local = np.column_stack([jump @ tangent, jump @ normal])
+    lam, mu = scene.material.lame  # the 3D constants
+    nu = lam / (2 * (lam + mu))
+    kappa = 3 - 4 * nu if scene.model.kind == "plane_strain" else (3 - nu) / (1 + nu)
+    k1, k2 = stress_intensity_from_jump(r, jump_local, mu, kappa)
+    # E' = 8 mu / (kappa + 1): E/(1 - nu^2) in plane strain, E in plane stress
+    G = (k1 * k1 + k2 * k2) * (kappa + 1) / (8 * mu)
+    return SharpCrack(K_I=k1, K_II=k2, G=float(G), energy=float(energy), reactions=reactions)
+
+
+def griffith_onset(scene, force: str, h_core: float | None = None) -> dict[str, float]:
+    """Where the scene's sharp crack starts to grow by Griffith: t_c with G(t_c) = gamma.
+
+    For loads linear in t, ``G(t) = G1 t^2`` and the reaction ``F(t) = F1 t`` (G1, F1 from
+    :func:`sharp_crack_solution` at t = 1, ``force`` a key of its reactions, e.g. "Fy_top").
+    Also for ``gamma_eff = gamma (1 + h_core/(2 epsilon))``, the toughness of a band whose core
+    is one element of size h_core wide (default: the adaptive core size max(hmin, epsilon/10),
+    or the uniform mesh size). Returns t_c, F_c, t_c_eff, F_c_eff, G1, F1, K_I, K_II, kink_deg.
+    """
+    sharp = sharp_crack_solution(scene, t=1.0)
+    gamma = scene.material.gamma.value()
+    eps = scene.phase_field.epsilon
+    if h_core is None:
+        a = scene.adaptivity
+        h_core = max(a.hmin, a.h_crack or eps / 10) if a.enabled else scene.mesh_size
+    gamma_eff = gamma * (1 + h_core / (2 * eps))
+    f1 = sharp.reactions[force]
+    t_c, t_eff = math.sqrt(gamma / sharp.G), math.sqrt(gamma_eff / sharp.G)
+    return {"G1": sharp.G, "F1": f1, "K_I": sharp.K_I, "K_II": sharp.K_II,
+            "kink_deg": sharp.kink_deg, "gamma_eff": gamma_eff, "t_c": t_c, "F_c": f1 * t_c,
+            "t_c_eff": t_eff, "F_c_eff": f1 * t_eff}

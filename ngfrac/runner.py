@@ -129,8 +129,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                     history.write(record.row())
                     if results is not None:
                         results.append(record)
-            last = record.step == stepper.n_steps
-            if (output.vtk_every and record.step % output.vtk_every == 0) or last:
+            if output.vtk_every and stepper.output_due(output.vtk_every) or stepper.finished:
                 with timer.phase("output: VTK and snapshots"):
                     write_snapshot(series, stepper)
                     if results is not None:

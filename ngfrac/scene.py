@@ -330,20 +330,44 @@ class Load(_Section):
 
 @dataclass(frozen=True)
 class TimeSettings(_Section):
-    """Uniform time steps t_k = k dt up to t_end."""
+    """Time steps on the grid t = n dt (n an integer), up to t_end.
+
+    Fixed: every step is dt. ``adaptive = true``: a step is dt 2^j with 0 <= j <=
+    ``max_doublings``; it doubles while the largest change of z at a node stays below
+    ``dz_target``/4 and halves (the step is redone) when it exceeds ``dz_target``. Steps of
+    2^j dt start at multiples of 2^j dt, so every multiple of dt_max = dt 2^max_doublings (the
+    output times) is hit exactly and times stay exact products.
+    """
 
     SECTION: ClassVar[str] = "time"
     dt: float = REQUIRED  # type: ignore[assignment]
     t_end: float = REQUIRED  # type: ignore[assignment]
+    adaptive: bool = False
+    max_doublings: int = 4
+    dz_target: float = 0.01
 
     def validate(self) -> None:
-        _require(self.dt > 0, self.SECTION, "dt", self.dt, "the time step must be > 0")
-        _require(self.t_end > 0, self.SECTION, "t_end", self.t_end, "the end time must be > 0")
+        s = self.SECTION
+        _require(self.dt > 0, s, "dt", self.dt, "the time step must be > 0")
+        _require(self.t_end > 0, s, "t_end", self.t_end, "the end time must be > 0")
+        _require(0 <= self.max_doublings <= 12, s, "max_doublings", self.max_doublings,
+                 "must be in 0..12 (the largest step is dt * 2**max_doublings)")
+        _require(0 < self.dz_target <= 1, s, "dz_target", self.dz_target, "must be in (0, 1]")
+
+    @property
+    def n_ticks(self) -> int:
+        """End of the run on the grid t = n dt: t_end/dt rounded up."""
+        return max(1, math.ceil(self.t_end / self.dt - 1e-9))
 
     @property
     def n_steps(self) -> int:
-        """Number of steps: t_end/dt rounded up (a last step may end past t_end by < dt)."""
-        return max(1, math.ceil(self.t_end / self.dt - 1e-9))
+        """Number of steps of a fixed-step run (an upper bound for an adaptive one)."""
+        return self.n_ticks
+
+    @property
+    def output_ticks(self) -> int:
+        """Grid points between two output times of an adaptive run (1 for fixed steps)."""
+        return 2 ** self.max_doublings if self.adaptive else 1
 
 
 @dataclass(frozen=True)

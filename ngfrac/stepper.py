@@ -1,6 +1,6 @@
 """The time stepper: the paper's semi-implicit staggered scheme (its eq. 7).
 
-Step k (time t_k = k dt)::
+Step k, from t_{k-1} to t_k = t_{k-1} + dt (all times on the grid n * time.dt)::
 
     alpha1 (u^k - u^{k-1})/dt = div(((1 - z^{k-1})^2 + eta) sigma[u^k])       u = g(t_k) on Gamma_D
     alpha2 (zt - z^{k-1})/dt  = eps div(gamma grad zt) - gamma zt/eps + W (1 - zt)
@@ -64,6 +64,7 @@ class StepRecord:
     tip_y: float = math.nan
     dz_max: float = math.nan
     z_iterations: int = 0
+    dt: float = math.nan
     eta_total: float = math.nan
     n_adapt: int = 0
     step_s: float = math.nan
@@ -110,8 +111,13 @@ class PhaseFieldStepper:
         self.scene = scene
         self.model = make_model(scene)
         self.k = 0
+        self.ticks = 0
+        """Time as a count of ``time.dt``: t = ticks * dt, exact for any number of steps."""
+        self.level = scene.time.max_doublings if scene.time.adaptive else 0
+        """Current step is dt * 2**level (adaptive time steps)."""
         self.timer = PhaseTimer()
         self.time = ngs.Parameter(0.0)
+        self.inv_dt = ngs.Parameter(1.0 / scene.time.dt)
         self._started = time.perf_counter()
         self._polylines = [crack.points for crack in scene.cracks]
         gamma = scene.material.gamma
@@ -147,7 +153,7 @@ class PhaseFieldStepper:
         self.indicators: dict = {}  # reaction-force test functions of this mesh
         self.forces: dict[str, float] = {}
 
-        dt = sc.time.dt
+        inv_dt = self.inv_dt
         # One quadrature, exact for constant gamma, in every form and energy: the u-step then
         # minimizes exactly the energy that the diagnostics report.
         self.integration_order = 2 * disc.order + 2 * disc.z_order
@@ -156,12 +162,12 @@ class PhaseFieldStepper:
         u, v = self.fes_u.TnT()
         stiffness = ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v)
         if pf.alpha1 > 0:
-            stiffness = stiffness + pf.alpha1 / dt * u * v
+            stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
         self.a_u += stiffness * dx
         self.m_u = None
         if pf.alpha1 > 0:
-            self.m_u = ngs.BilinearForm(pf.alpha1 / dt * u * v * dx, symmetric=True).Assemble()
+            self.m_u = ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
         self._inv_u = None
         self.body_force = self.model.body_force(sc.material, self.time)
         self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
@@ -172,8 +178,8 @@ class PhaseFieldStepper:
         gamma, eps = self.gamma, pf.epsilon
         self.a_z = ngs.BilinearForm(self.fes_z, symmetric=True)
         self.a_z += (eps * gamma * ngs.grad(zt) * ngs.grad(w)
-                     + (pf.alpha2 / dt + gamma / eps + self._drive) * zt * w) * dx
-        self.f_z = ngs.LinearForm((pf.alpha2 / dt * self.z + self._drive) * w * dx)
+                     + (pf.alpha2 * inv_dt + gamma / eps + self._drive) * zt * w) * dx
+        self.f_z = ngs.LinearForm((pf.alpha2 * inv_dt * self.z + self._drive) * w * dx)
         self._inv_z = None
 
     def _set_initial_state(self) -> None:
@@ -253,12 +259,25 @@ class PhaseFieldStepper:
     # -- one step ---------------------------------------------------------------------------
     @property
     def t(self) -> float:
-        """Current time t_k = k dt."""
-        return self.k * self.scene.time.dt
+        """Current time, ticks * time.dt (a product, never a sum of steps)."""
+        return self.ticks * self.scene.time.dt
 
     @property
     def n_steps(self) -> int:
+        """Steps of a fixed-step run; for adaptive steps an upper bound."""
         return self.scene.time.n_steps
+
+    @property
+    def finished(self) -> bool:
+        return self.ticks >= self.scene.time.n_ticks
+
+    def output_due(self, every: int) -> bool:
+        """True at every ``every``-th output time (every step for fixed steps, every
+        dt * 2**max_doublings for adaptive ones), and at the end."""
+        return self.finished or (every > 0 and self.ticks % (every * self.scene.time.output_ticks) == 0)
+
+    def _step_ticks(self) -> int:
+        return min(2 ** self.level, self.scene.time.n_ticks - self.ticks)
 
     def _apply_boundary_values(self) -> None:
         self.model.set_boundary(self.u_boundary, self._boundary_cf)
@@ -281,7 +300,8 @@ class PhaseFieldStepper:
             self._apply_boundary_values()
             residual = self.u.vec.CreateVector()
             if self.m_u is not None:
-                residual.data = self.m_u.mat * self.u_prev.vec - self.a_u.mat * self.u.vec
+                residual.data = self.inv_dt.Get() * (self.m_u.mat * self.u_prev.vec) \
+                    - self.a_u.mat * self.u.vec
             else:
                 residual.data = -self.a_u.mat * self.u.vec
             if self.f_u is not None:
@@ -324,33 +344,50 @@ class PhaseFieldStepper:
         return iterations
 
     def step(self, diagnose: bool = True) -> StepRecord:
-        """Advance one time step.
+        """Advance one time step (with adaptive time steps, redo it smaller if z jumped).
 
         Parameters
         ----------
         diagnose : bool
-            Compute energies, crack length and tip (costs integrals); else those are NaN.
+            Compute energies, crack length, tip and reactions; else those are NaN.
         """
         started = time.perf_counter()
-        self.k += 1
-        self.time.Set(self.t)
+        settings = self.scene.time
         with ngs.TaskManager():
             self.u_prev.vec.data = self.u.vec
-            solve_started = time.perf_counter()
-            self.solve_u()
-            solve_s = time.perf_counter() - solve_started
-            if diagnose:  # before z changes and before any new mesh: the residual of this solve
-                with self.timer.phase("diagnostics: reactions"):
-                    self.forces = reaction_columns(self)
-            solve_started = time.perf_counter()
-            iterations = self._solve_z()
-            solve_s += time.perf_counter() - solve_started
-            with self.timer.phase("z: bounds at nodes"):
-                old = self.nodes.values(self.z)
-                trial = self.nodes.values(self.z_trial)
-                new = np.minimum(1.0, np.maximum(trial, old))
-                self.nodes.assign(self.z, new)
-        dz_max = float(np.max(new - old)) if len(new) else 0.0
+            saved_z = self.z.vec.CreateVector()
+            saved_z.data = self.z.vec
+            solve_s = 0.0
+            while True:
+                n = self._step_ticks()
+                self.time.Set((self.ticks + n) * settings.dt)
+                self.inv_dt.Set(1.0 / (n * settings.dt))
+                solve_started = time.perf_counter()
+                self.solve_u()
+                solve_s += time.perf_counter() - solve_started
+                if diagnose:  # before z changes and before any new mesh: the residual of this solve
+                    with self.timer.phase("diagnostics: reactions"):
+                        self.forces = reaction_columns(self)
+                solve_started = time.perf_counter()
+                iterations = self._solve_z()
+                solve_s += time.perf_counter() - solve_started
+                with self.timer.phase("z: bounds at nodes"):
+                    old = self.nodes.values(self.z)
+                    trial = self.nodes.values(self.z_trial)
+                    new = np.minimum(1.0, np.maximum(trial, old))
+                    self.nodes.assign(self.z, new)
+                dz_max = float(np.max(new - old)) if len(new) else 0.0
+                if not (settings.adaptive and dz_max > settings.dz_target and self.level > 0):
+                    break
+                # z changed too much: halve the step (more if far off) and redo it
+                self.level = max(0, self.level - max(1, math.ceil(math.log2(dz_max / settings.dz_target))))
+                self.z.vec.data = saved_z
+                self.timer.add("time: rejected steps", 0.0)
+            self.ticks += n
+            self.k += 1
+            if (settings.adaptive and dz_max < settings.dz_target / 4 and self.level < settings.max_doublings
+                    and self.ticks % 2 ** (self.level + 1) == 0):
+                self.level += 1
         adapt_s = 0.0
         if self.adapter is not None and self.k % self.scene.adaptivity.every == 0:
             adapt_started = time.perf_counter()
@@ -361,15 +398,15 @@ class PhaseFieldStepper:
                 with ngs.TaskManager():
                     self.adapt(tip)
             adapt_s = time.perf_counter() - adapt_started
-        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations,
+        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations, dt=n * settings.dt,
                            step_s=time.perf_counter() - started, solve_s=solve_s, adapt_s=adapt_s)
 
     def record(self, diagnose: bool = True, dz_max: float = math.nan, z_iterations: int = 0,
-               step_s: float = math.nan, solve_s: float = math.nan,
+               dt: float = math.nan, step_s: float = math.nan, solve_s: float = math.nan,
                adapt_s: float = 0.0) -> StepRecord:
         """A record of the current state (diagnostics only when asked for)."""
         eta_total = self.adapter.eta_total if self.adapter is not None else math.nan
-        base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self._started,
+        base = dict(step=self.k, t=self.t, dt=dt, wall_s=time.perf_counter() - self._started,
                     nv=self.mesh.nv, ndof=self.fes_u.ndof + self.fes_z.ndof,
                     dz_max=dz_max, z_iterations=z_iterations, eta_total=eta_total,
                     n_adapt=len(self.adaptations), step_s=step_s, solve_s=solve_s, adapt_s=adapt_s)
@@ -396,8 +433,8 @@ class PhaseFieldStepper:
         every = history_every or self.scene.output.history_every
         # One TaskManager for the whole run: starting NGSolve's threads costs ~0.1 s each time.
         with ngs.TaskManager():
-            while self.k < self.n_steps:
-                last = self.k + 1 == self.n_steps
+            while not self.finished:
+                last = self.ticks + self._step_ticks() >= self.scene.time.n_ticks
                 yield self.step(diagnose=last or (self.k + 1) % every == 0)
 
     def z_node_values(self) -> np.ndarray:
