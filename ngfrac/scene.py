@@ -2,7 +2,7 @@
 
 A scene file has the sections ``[model]``, ``[material]``, ``[phase_field]``,
 ``[geometry]``, ``[[cracks]]``, ``[[loads]]``, ``[time]``, ``[discretization]``,
-``[output]`` and ``[adaptivity]``; docs/scene.md lists every key. Each section is a frozen
+``[output]`` and ``[adaptivity]``; docs/user-guide.md lists every key. Each section is a frozen
 dataclass that validates its own values; :class:`Scene` checks what spans sections (loads on
 existing boundaries, cracks inside the domain, toughness positive everywhere).
 Every problem raises :class:`SceneError` with one line that names the key, the value and

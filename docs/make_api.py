@@ -1,0 +1,63 @@
+"""Write docs/api.md from the docstrings of the public API.
+
+    python docs/make_api.py
+"""
+from __future__ import annotations
+
+import importlib
+import inspect
+from pathlib import Path
+
+MODULES = ["ngfrac", "ngfrac.scene", "ngfrac.stepper", "ngfrac.runner", "ngfrac.adaptivity",
+           "ngfrac.meshing", "ngfrac.transfer", "ngfrac.models", "ngfrac.reactions",
+           "ngfrac.results", "ngfrac.checkpoint", "ngfrac.studies", "ngfrac.crackpath",
+           "ngfrac.plotting", "ngfrac.output", "ngfrac.expressions", "ngfrac.cracks",
+           "ngfrac.geometry", "ngfrac.nodal", "ngfrac.diagnostics", "ngfrac.profiling",
+           "estimators"]
+
+
+def public_members(module):
+    names = getattr(module, "__all__", None)
+    if names is None:
+        names = [n for n, obj in vars(module).items()
+                 if not n.startswith("_") and (inspect.isfunction(obj) or inspect.isclass(obj))
+                 and getattr(obj, "__module__", "") == module.__name__]
+    return [(n, getattr(module, n)) for n in names if hasattr(module, n)]
+
+
+def signature(obj) -> str:
+    try:
+        return str(inspect.signature(obj))
+    except (TypeError, ValueError):
+        return ""
+
+
+def main() -> None:
+    lines = ["# API reference", "",
+             "Generated from the docstrings by `python docs/make_api.py`; do not edit by hand.", ""]
+    for name in MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ImportError:
+            continue
+        lines += [f"## `{name}`", "", inspect.cleandoc(module.__doc__ or ""), ""]
+        if name == "ngfrac":
+            continue  # the package re-exports; documented in its modules
+        for member_name, obj in public_members(module):
+            if not (inspect.isfunction(obj) or inspect.isclass(obj)):
+                continue
+            kind = "class" if inspect.isclass(obj) else "def"
+            lines += [f"### {kind} `{member_name}{signature(obj)}`", "",
+                      inspect.cleandoc(obj.__doc__ or "(no docstring)"), ""]
+            if inspect.isclass(obj):
+                for method_name, method in vars(obj).items():
+                    if method_name.startswith("_") or not callable(method) or not method.__doc__:
+                        continue
+                    lines += [f"- `{method_name}{signature(method)}`: "
+                              + inspect.cleandoc(method.__doc__).splitlines()[0]]
+                lines.append("")
+    Path(__file__).with_name("api.md").write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
