@@ -125,6 +125,7 @@ class PhaseFieldStepper:
         self.gamma = gamma.value() if gamma.is_constant else gamma.to_coefficient()
         self.adapter = MeshAdapter(scene) if scene.adaptivity.enabled else None
         self.adaptations: list[Adaptation] = []
+        self.forces: dict[str, float] = {}  # reaction columns of the last diagnosed u-solve
         given = mesh is not None
         if mesh is None:
             size = self.adapter.sizes.hmax if self.adapter else scene.mesh_size
@@ -151,7 +152,6 @@ class PhaseFieldStepper:
         self._boundary_cf = self.model.boundary_values(mesh, sc.loads, self.time)
         self._sizes: np.ndarray | None = None
         self.indicators: dict = {}  # reaction-force test functions of this mesh
-        self.forces: dict[str, float] = {}
 
         inv_dt = self.inv_dt
         # One quadrature, exact for constant gamma, in every form and energy: the u-step then
