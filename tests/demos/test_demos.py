@@ -10,7 +10,7 @@ from ngfrac.plotting import read_history
 ROOT = Path(__file__).resolve().parents[2]
 DEMOS = ROOT / "demos"
 QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=50",
-         "time.dt=1e-3"]
+         "time.dt=1e-3", "adaptivity.max_vertices=2000"]
 
 
 def load_demo(name):
