@@ -11,8 +11,8 @@ Call :func:`convergence_study` from your own pytest files::
 Each value ``v`` gives the scene ``Scene.from_dict(apply_overrides(scene.to_dict(), [f"{key}={v}"]))``
 (the same path as ``ngfrac run --set key=v``), which is run and measured. Rates are the slope
 of ``numpy.polyfit(log(abscissa), log(error), 1)``: ``error ~ C abscissa**rate``. Against the
-mesh size a rate is positive (``p + 1`` for an L2 error of order ``p``); against the number of
-degrees of freedom it is negative (``-(p + 1)/2`` in 2D).
+mesh size a rate is positive (``p + 1`` for the L2 error of elements of order ``p``); against
+the number of degrees of freedom it is negative (``-(p + 1)/2`` in 2D).
 """
 from __future__ import annotations
 
