@@ -377,7 +377,11 @@ class Discretization(_Section):
     ``order`` is the polynomial order of u; ``order_z`` that of z (1 or 2: the bounds and
     the non-repair condition are enforced at the Lagrange nodes, which is exact for P1/P2).
     ``coupling = "paper"`` solves z with the previous u (the paper's eq. 7);
-    ``"staggered"`` uses the u just computed.
+    ``"staggered"`` uses the u just computed. ``z_update = "projection"`` is the paper's
+    ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
+    that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
+    search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
+    an energy descent.
     """
 
     SECTION: ClassVar[str] = "discretization"
@@ -386,6 +390,7 @@ class Discretization(_Section):
     u_solver: str = "sparsecholesky"
     z_solver: str = "sparsecholesky"
     coupling: str = "paper"
+    z_update: str = "projection"
 
     def validate(self) -> None:
         s = self.SECTION
@@ -398,6 +403,9 @@ class Discretization(_Section):
                  self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
         _require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
                  "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
+        _require(self.z_update in ("projection", "descent"), s, "z_update", self.z_update,
+                 "choose 'projection' (the paper's min(1, max(z_trial, z_old))) or 'descent' "
+                 "(the projection, shortened where it would raise the z-step's energy)")
 
     @property
     def z_order(self) -> int:

@@ -308,7 +308,8 @@ class PhaseFieldStepper:
                 residual.data += self.f_u.vec
             self.u.vec.data += self._inv_u * residual
         if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
-            raise SolverError(f"the u-solve gave non-finite values at step {self.k} (t={self.t:g}); "
+            raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "
+                              f"(t={self.time.Get():g}); "
                               "raise phase_field.residual_stiffness or lower time.dt")
 
     def _solve_z(self) -> int:
@@ -319,7 +320,8 @@ class PhaseFieldStepper:
         with self.timer.phase("z: solve"):
             iterations = self._solve_z_system()
         if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
-            raise SolverError(f"the z-solve gave non-finite values at step {self.k} (t={self.t:g}); "
+            raise SolverError(f"the z-solve gave non-finite values at step {self.k + 1} "
+                              f"(t={self.time.Get():g}); "
                               "lower time.dt")
         return iterations
 
@@ -333,7 +335,8 @@ class PhaseFieldStepper:
             cg.Solve(rhs=self.f_z.vec, sol=self.z_trial.vec, initialize=False)
             iterations = cg.iterations
             if iterations >= 2000:
-                raise SolverError(f"the z-solve (CG) did not converge at step {self.k} (t={self.t:g}); "
+                raise SolverError(f"the z-solve (CG) did not converge at step {self.k + 1} "
+                                  f"(t={self.time.Get():g}); "
                                   "set discretization.z_solver = 'sparsecholesky'")
         else:
             if self._inv_z is None:
@@ -342,6 +345,28 @@ class PhaseFieldStepper:
                 self._inv_z.Update()
             self.z_trial.vec.data = self._inv_z * self.f_z.vec
         return iterations
+
+    def _descent(self, old: np.ndarray, projected: np.ndarray) -> np.ndarray:
+        """z_old + theta (P - z_old) with theta in [0, 1] minimizing the z-step's energy.
+
+        The z-step minimizes G(z) = 1/2 z.A z - f.z (A, f: the assembled z-forms, which hold
+        z_old). Every point between z_old and the projection P is feasible (both are), G is
+        quadratic along the segment, so the exact minimizer over it never exceeds G(z_old).
+        """
+        direction_nodes = projected - old
+        if not np.any(direction_nodes):
+            return projected
+        z_old = self.z.vec.CreateVector()
+        z_old.data = self.z.vec  # z still holds z_old here
+        direction = ngs.GridFunction(self.fes_z)
+        self.nodes.assign(direction, direction_nodes)
+        a_d = (self.a_z.mat * direction.vec).Evaluate()
+        curvature = ngs.InnerProduct(direction.vec, a_d)
+        slope = ngs.InnerProduct(z_old, a_d) - ngs.InnerProduct(self.f_z.vec, direction.vec)
+        theta = 1.0 if curvature <= 0 else min(1.0, max(0.0, -slope / curvature))
+        if theta < 1.0:
+            self.timer.add("z: shortened projections", 0.0)
+        return old + theta * direction_nodes
 
     def step(self, diagnose: bool = True) -> StepRecord:
         """Advance one time step (with adaptive time steps, redo it smaller if z jumped).
@@ -375,6 +400,8 @@ class PhaseFieldStepper:
                     old = self.nodes.values(self.z)
                     trial = self.nodes.values(self.z_trial)
                     new = np.minimum(1.0, np.maximum(trial, old))
+                    if self.scene.discretization.z_update == "descent":
+                        new = self._descent(old, new)
                     self.nodes.assign(self.z, new)
                 dz_max = float(np.max(new - old)) if len(new) else 0.0
                 if not (settings.adaptive and dz_max > settings.dz_target and self.level > 0):

@@ -314,7 +314,8 @@ ENERGY_PROJECTION = ("E_total rises with the load held on a fixed mesh: the noda
                      "z = min(1, max(z_trial, z_old)) after the unconstrained z-solve is not a "
                      "descent step. Once the crack rests (arrested, or the plate cut) the z-solve "
                      "lowers E by healing (4e-3 .. 6e-2 of E), the projection adds that back and "
-                     "up to 1e-7 .. 6e-7 of E more; a bound-constrained z-solve would not")
+                     "up to 1e-7 .. 6e-7 of E more. discretization.z_update = 'descent' with "
+                     "coupling = 'staggered' does not (the *_descent cases)")
 
 CASES: list[StressCase] = [
     StressCase("dt_100x", f"tau = 0.05 (100 x the demo's {DEMO_DT:g}), mode III, ramp to 1 then "
@@ -346,6 +347,18 @@ CASES: list[StressCase] = [
                lambda: slit(*mode3_load(RAMP_HOLD), f'material.gamma="{TOUGHNESS_JUMP}"',
                             "discretization.order=1", "time.dt=1e-3", "time.t_end=0.3"),
                check_arrest, min_held=190, energy_known=ENERGY_PROJECTION),
+    StressCase("toughness_100to1_descent", "as toughness_100to1 with z_update = 'descent' and "
+               "coupling = 'staggered': the energy-descent variant of the scheme",
+               lambda: slit(*mode3_load(RAMP_HOLD), f'material.gamma="{TOUGHNESS_JUMP}"',
+                            "discretization.order=1", "time.dt=1e-3", "time.t_end=0.3",
+                            'discretization.z_update="descent"', 'discretization.coupling="staggered"'),
+               check_arrest, min_held=190),
+    StressCase("dt_adaptive_128x_descent", "as dt_adaptive_128x with z_update = 'descent' and "
+               "coupling = 'staggered'",
+               lambda: slit(*mode3_load(RAMP_HOLD), f"time.dt={DEMO_DT}", "time.adaptive=true",
+                            "time.max_doublings=7", "time.t_end=0.5",
+                            'discretization.z_update="descent"', 'discretization.coupling="staggered"'),
+               check_crosses, min_held=10),
     StressCase("unload_reload", "load 0 -> 1 -> 0 (held) -> 1.5, P1",
                lambda: slit(*mode3_load(UNLOAD_RELOAD), "discretization.order=1", "time.dt=2e-3",
                             "time.t_end=0.4"),

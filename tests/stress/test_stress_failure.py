@@ -46,7 +46,6 @@ def test_failure_keeps_the_last_checkpoint(failure):
     assert result.restarted_step == sc.failure_scene().time.n_steps
 
 
-@pytest.mark.xfail(strict=True, reason=sc.FAILING_STEP)
 def test_error_names_the_failing_step(failure):
     _, _, result = failure
     found = sc.failing_step_problems(result)
