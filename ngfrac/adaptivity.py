@@ -1,7 +1,7 @@
 """Adaptive meshes for the phase field: estimate on z, size field, regenerate, transfer.
 
 Every ``adaptivity.every`` steps the stepper asks :meth:`MeshAdapter.wants_new_mesh`; a new
-mesh is made only when the crack needs it (the tip moved by more than a third of the tip
+mesh is made only when the crack needs it (the tip moved by more than half the tip
 margin since the last mesh, or the cracked band reached elements coarser than asked for).
 The new mesh comes from a size field (:mod:`ngfrac.meshing`): equidistribution of the
 estimator on z (ZZ or residual, :mod:`estimators`), then h <= h_crack in the core (z >= 0.9),
@@ -23,8 +23,7 @@ import ngsolve as ngs
 import estimators
 
 from .geometry import netgen_geometry
-from .meshing import SIZE_RATIO, ElementGeometry, edge_numbers, adapt_mesh, enforce_crack_sizes, \
-    size_field_from_indicator
+from .meshing import SIZE_RATIO, ElementGeometry, adapt_mesh, edge_numbers, size_field_from_indicator
 from .nodal import LagrangeNodes
 from .scene import Scene
 
@@ -39,9 +38,10 @@ class AdaptivitySizes:
     """The resolved lengths of the adaptivity section (zeros replaced by their defaults).
 
     A disc of radius ``tip_margin`` at ``h_tip`` costs about 1.45 pi r^2 / h^2 vertices
-    (the Netgen constant of :mod:`ngfrac.meshing`): at r = 3 eps, h = eps/4 that is 650, at
-    h = eps/10 it would be 4,100, which is why the tip disc is refined to h_band and only the
-    core (z >= 0.9) to h_crack.
+    (the Netgen constant of :mod:`ngfrac.meshing`): at r = 4 eps, h = eps/4 that is 1,170, at
+    h = eps/10 it would be 7,300, which is why the tip disc is refined to h_band and only the
+    core (z >= 0.9) to h_crack. A new mesh is made when the tip has moved by r/2, so the tip
+    stays at least r/2 inside the refined disc.
     """
 
     hmin: float
@@ -58,7 +58,7 @@ class AdaptivitySizes:
         h_band = max(a.hmin, a.h_band or eps / 4)
         return cls(hmin=a.hmin, hmax=a.hmax or min(g.width, g.height) / 10, h_crack=h_crack,
                    h_band=h_band, h_tip=max(a.hmin, a.h_tip or h_band),
-                   tip_margin=a.tip_margin or 3 * eps)
+                   tip_margin=a.tip_margin or 4 * eps)
 
 
 @dataclass(frozen=True)
@@ -109,16 +109,20 @@ class MeshAdapter:
         self.eta_total = float(np.sqrt(np.sum(np.asarray(eta) ** 2)))
         return np.asarray(eta)
 
-    def element_sizes(self, mesh: ngs.Mesh, z: ngs.GridFunction, eta: np.ndarray,
-                      tip: np.ndarray | None) -> np.ndarray:
-        """Requested size per element of ``mesh``."""
+    def element_sizes(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z: ngs.GridFunction,
+                      eta: np.ndarray, tip: np.ndarray | None) -> np.ndarray:
+        """Requested size per element of ``mesh``: equidistribution of ``eta``, then the
+        crack's band, core and tip sizes (numpy on arrays cached per mesh)."""
         s = self.sizes
-        order = z.space.globalorder
         sizes = size_field_from_indicator(mesh, eta, target_h=s.h_crack, hmin=s.hmin, hmax=s.hmax,
-                                          order=order)
-        sizes = enforce_crack_sizes(mesh, sizes, z=z, z_level=BAND_LEVEL, h_crack=s.h_band)
-        sizes = enforce_crack_sizes(mesh, sizes, z=z, z_level=CORE_LEVEL, h_crack=s.h_crack,
-                                    tip=tip, h_tip=s.h_tip, margin=s.tip_margin)
+                                          order=z.space.globalorder)
+        geom, zmax = self._element_node_max(mesh, nodes, nodes.values(z))
+        np.minimum(sizes, np.where(zmax >= BAND_LEVEL, s.h_band, np.inf), out=sizes)
+        np.minimum(sizes, np.where(zmax >= CORE_LEVEL, s.h_crack, np.inf), out=sizes)
+        if tip is not None:
+            # |c - tip| - r_T is a lower bound of the distance from the tip to T
+            near = np.linalg.norm(geom.centroids - tip[: geom.dim], axis=1) - geom.radii <= s.tip_margin
+            np.minimum(sizes, np.where(near, s.h_tip, np.inf), out=sizes)
         return np.maximum(sizes, s.hmin)
 
     def _element_node_max(self, mesh: ngs.Mesh, nodes: LagrangeNodes,
@@ -145,14 +149,14 @@ class MeshAdapter:
                        tip: np.ndarray) -> bool:
         """True when the crack has outgrown the fine part of the mesh made last time.
 
-        That is: the tip moved by more than a third of the tip margin, or the band or the
+        That is: the tip moved by more than half the tip margin, or the band or the
         core of the crack reached elements 1.5 times larger than the largest it had right
         after the last mesh change (the cap may have kept those above h_band, h_crack).
         Cheap (numpy on cached arrays), so it can run every step.
         """
         if self.last_tip is None or self.achieved is None:
             return True
-        if np.all(np.isfinite(tip)) and np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 3:
+        if np.all(np.isfinite(tip)) and np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2:
             return True
         band, core = self._band_sizes(mesh, nodes, z_values)
         return band > 1.5 * self.achieved[0] or core > 1.5 * self.achieved[1]
@@ -163,12 +167,13 @@ class MeshAdapter:
         self.last_tip = np.array(tip, dtype=float)
         self.achieved = self._band_sizes(mesh, nodes, z_values)
 
-    def new_mesh(self, mesh: ngs.Mesh, z: ngs.GridFunction, tip: np.ndarray) -> tuple[ngs.Mesh, dict]:
+    def new_mesh(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z: ngs.GridFunction,
+                 tip: np.ndarray) -> tuple[ngs.Mesh, dict]:
         """A mesh for the current z; returns it with the time spent in each phase."""
         started = time.perf_counter()
         eta = self.estimate(z)
         estimated = time.perf_counter()
-        sizes = self.element_sizes(mesh, z, eta, tip if np.all(np.isfinite(tip)) else None)
+        sizes = self.element_sizes(mesh, nodes, z, eta, tip if np.all(np.isfinite(tip)) else None)
         marked = time.perf_counter()
         # Netgen gets sizes / SIZE_RATIO (it realizes graded fields coarser than asked); a
         # floor of hmin * SIZE_RATIO keeps what it is asked for at or above hmin.

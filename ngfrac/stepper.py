@@ -31,7 +31,7 @@ from .nodal import LagrangeNodes
 from .profiling import PhaseTimer
 from .reactions import reaction_columns
 from .scene import Scene
-from .transfer import crack_length, transfer, transfer_phase_field
+from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
 
@@ -214,7 +214,7 @@ class PhaseFieldStepper:
         """Resolve z0 before the first step: remesh and set z0 anew from its formula."""
         assert self.adapter is not None
         for _ in range(self.INITIAL_PASSES):
-            mesh, _ = self.adapter.new_mesh(self.mesh, self.z, self.tip())
+            mesh, _ = self.adapter.new_mesh(self.mesh, self.nodes, self.z, self.tip())
             self._setup(mesh)
             self._set_initial_state()
         self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), self.tip())
@@ -235,14 +235,19 @@ class PhaseFieldStepper:
         eps = self.scene.phase_field.epsilon
         nv_before = self.mesh.nv
         length_before = crack_length(self.z, eps)
-        new_mesh, times = self.adapter.new_mesh(self.mesh, self.z, tip)
+        new_mesh, times = self.adapter.new_mesh(self.mesh, self.nodes, self.z, tip)
         started = time.perf_counter()
         z_old, u_old = self.z, self.u
         self._setup(new_mesh)
-        z_new, _ = transfer_phase_field(z_old, z_old, self.fes_z)
-        self.z.vec.data = z_new.vec
-        method = "nodes" if self.scene.discretization.order <= 2 and self.fes_u.dim == 1 else "set"
-        self.u.vec.data = transfer(u_old, self.fes_u, method=method).vec
+        if self.fes_u.dim == 1 and self.fes_u.globalorder == self.fes_z.globalorder:
+            # u and z have the same Lagrange nodes: locate them in the old mesh once
+            located = locate(z_old.space.mesh, self.nodes.points)
+            self.nodes.assign(self.z, np.clip(evaluate(z_old, located), 0.0, 1.0))
+            self.nodes.assign(self.u, evaluate(u_old, located))
+        else:
+            z_new, _ = transfer_phase_field(z_old, z_old, self.fes_z)
+            self.z.vec.data = z_new.vec
+            self.u.vec.data = transfer(u_old, self.fes_u, method="set").vec
         self.u_prev.vec.data = self.u.vec
         times["transfer_s"] = time.perf_counter() - started
         for name, seconds in times.items():
