@@ -1,5 +1,6 @@
 """Every demo runs in a quick mode and shows one physical fact; z keeps its bounds."""
 import importlib.util
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,8 @@ QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_ever
 
 
 def load_demo(name):
+    if str(DEMOS) not in sys.path:
+        sys.path.insert(0, str(DEMOS))  # the scripts import their shared _common.py
     spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -68,7 +71,7 @@ CHECKS = {"mode3_slit": check_slit, "mode3_stripes": check_stripes}
 
 def test_every_demo_has_a_test():
     scenes = {path.stem for path in DEMOS.glob("*.toml")}
-    scripts = {path.stem for path in DEMOS.glob("*.py")}
+    scripts = {path.stem for path in DEMOS.glob("*.py") if not path.stem.startswith("_")}
     assert scenes == set(CHECKS), f"demos without a physics check: {scenes - set(CHECKS)}"
     assert scripts == scenes, f"scenes and scripts differ: {scenes ^ scripts}"
 
