@@ -4,7 +4,7 @@ The force that holds a boundary Gamma in place is ``F = int_Gamma sigma n ds``. 
 the stress of the finite-element solution loses an order (sigma is a derivative) and ignores
 the body force; the variationally consistent value comes from the residual instead::
 
-    R = A(z) u + alpha1/dt M (u - u_prev) - f          (the assembled u-equation)
+    R = A(z) u - alpha1/dt M u_prev - f     (A(z) includes alpha1/dt M: the assembled u-equation)
     F_i(Gamma) = <R, w_i>,   w_i = e_i on the dofs of Gamma, 0 on all other dofs
 
 R vanishes at the free dofs, so only the constrained dofs of Gamma contribute, and by Green's
@@ -55,7 +55,7 @@ def reaction(residual: ngs.BaseVector, fes: ngs.FESpace, boundary: str,
 
 
 def residual(stepper) -> ngs.BaseVector:
-    """``R = A u + M (u - u_prev) - f`` with the stepper's assembled u-forms."""
+    """``R = A u - (1/dt) M u_prev - f`` with the stepper's assembled u-forms (A holds alpha1/dt M)."""
     try:
         matrix = stepper.a_u.mat
     except TypeError:  # not assembled yet: before the first step, or right after a new mesh
@@ -63,8 +63,8 @@ def residual(stepper) -> ngs.BaseVector:
         matrix = stepper.a_u.mat
     r = stepper.u.vec.CreateVector()
     r.data = matrix * stepper.u.vec
-    if stepper.m_u is not None:
-        r.data -= stepper.m_u.mat * stepper.u_prev.vec
+    if stepper.m_u is not None:  # m_u holds alpha1 M; the step's 1/dt is a Parameter
+        r.data -= stepper.inv_dt.Get() * (stepper.m_u.mat * stepper.u_prev.vec)
     if stepper.f_u is not None:
         r.data -= stepper.f_u.vec
     return r
