@@ -9,7 +9,16 @@ Typical use::
     stepper = PhaseFieldStepper(load_scene("demos/mode3_slit.toml"))
     for record in stepper.run():
         ...
+
+Threads: NGSolve uses all cores inside ``TaskManager``; its idle threads spin, so two runs
+side by side slow each other down badly. Set ``NGFRAC_THREADS=1`` (any positive integer) in
+the environment to cap the threads of each run before starting several at once.
 """
+import logging as _logging
+import os as _os
+
+import ngsolve as _ngs
+
 from .expressions import Expression, ExpressionError
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene
@@ -18,3 +27,17 @@ from .stepper import PhaseFieldStepper, SolverError, StepRecord
 __all__ = ["Expression", "ExpressionError", "PhaseFieldStepper", "RunSummary", "Scene",
            "SceneError", "SolverError", "StepRecord", "load_scene", "run_scene"]
 __version__ = "0.1.0"
+
+
+def _threads_from_environment() -> None:
+    value = _os.environ.get("NGFRAC_THREADS", "").strip()
+    if not value:
+        return
+    if not value.isdigit() or int(value) < 1:
+        _logging.getLogger(__name__).warning(
+            "NGFRAC_THREADS = %r ignored: expected a positive integer, e.g. NGFRAC_THREADS=1", value)
+        return
+    _ngs.SetNumThreads(int(value))
+
+
+_threads_from_environment()
