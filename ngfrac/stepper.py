@@ -239,8 +239,9 @@ class PhaseFieldStepper:
         started = time.perf_counter()
         z_old, u_old = self.z, self.u
         self._setup(new_mesh)
-        if self.fes_u.dim == 1 and self.fes_u.globalorder == self.fes_z.globalorder:
-            # u and z have the same Lagrange nodes: locate them in the old mesh once
+        if self.model.n_components == 1 and self.fes_u.globalorder == self.fes_z.globalorder:
+            # u and z have the same Lagrange nodes: locate them in the old mesh once (a scalar u
+            # only: VectorH1.dim is 1 too, its components are separate spaces)
             located = locate(z_old.space.mesh, self.nodes.points)
             self.nodes.assign(self.z, np.clip(evaluate(z_old, located), 0.0, 1.0))
             self.nodes.assign(self.u, evaluate(u_old, located))
