@@ -23,7 +23,8 @@ import ngsolve as ngs
 import estimators
 
 from .geometry import netgen_geometry
-from .meshing import SIZE_RATIO, ElementGeometry, adapt_mesh, edge_numbers, size_field_from_indicator
+from .meshing import (SIZE_RATIO, ElementGeometry, VertexDensity, adapt_mesh, edge_numbers,
+                      size_field_from_indicator)
 from .nodal import LagrangeNodes
 from .scene import Scene
 
@@ -95,6 +96,11 @@ class MeshAdapter:
         self.achieved: tuple[float, float] | None = None
         self._cache: tuple[ngs.Mesh, ElementGeometry, np.ndarray] | None = None
         self.eta_total = math.nan
+        self.reason = ""
+        """Why the last mesh change was wanted (for logs and benchmarks)."""
+        self.density = VertexDensity()
+        """Netgen's vertex-count constant, learned from this run's meshes (one Netgen call
+        per change instead of two)."""
 
     def estimate(self, z: ngs.GridFunction) -> np.ndarray:
         """Error indicator per element for z (no knowledge of fracture in the estimator)."""
@@ -155,11 +161,20 @@ class MeshAdapter:
         Cheap (numpy on cached arrays), so it can run every step.
         """
         if self.last_tip is None or self.achieved is None:
-            return True
+            return self._because("first mesh")
         if np.all(np.isfinite(tip)) and np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2:
-            return True
+            return self._because("tip moved")
         band, core = self._band_sizes(mesh, nodes, z_values)
-        return band > 1.5 * self.achieved[0] or core > 1.5 * self.achieved[1]
+        if band > 1.5 * self.achieved[0]:
+            return self._because(f"band reached h = {band:.3g} (had {self.achieved[0]:.3g})")
+        if core > 1.5 * self.achieved[1]:
+            return self._because(f"core reached h = {core:.3g} (had {self.achieved[1]:.3g})")
+        return False
+
+    def _because(self, reason: str) -> bool:
+        self.reason = reason
+        log.info("new mesh wanted: %s", reason)
+        return True
 
     def remember(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z_values: np.ndarray,
                  tip: np.ndarray) -> None:
@@ -179,7 +194,7 @@ class MeshAdapter:
         # floor of hmin * SIZE_RATIO keeps what it is asked for at or above hmin.
         sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
         new = adapt_mesh(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
-                         max_vertices=self.settings.max_vertices)
+                         max_vertices=self.settings.max_vertices, density=self.density)
         done = time.perf_counter()
         return new, {"estimate_s": estimated - started, "mark_s": marked - estimated,
                      "remesh_s": done - marked}

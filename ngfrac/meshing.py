@@ -77,6 +77,30 @@ SIZE_RATIO = 1.3
 DENSITY = 1.0
 """Sample points per requested h along an edge (see :func:`sample_size_field`)."""
 
+LEARNED_MARGIN = 0.93
+"""Share of the cap a remesh aims at once :class:`VertexDensity` has measured its constant."""
+
+
+@dataclass
+class VertexDensity:
+    """The constant c of ``nv ~ c * int h^-d dx``, learned from the meshes made so far.
+
+    Netgen's c depends on the field (1.2 for smooth fields, up to 1.6 for a small fine disc),
+    so a fixed c mispredicts a crack mesh by up to 40 %: in the adaptive Fig. 2 demo 49 of 50
+    remeshes with c = 1.45 overshot the cap and were made twice. Successive meshes of one run
+    have similar fields, so the c measured on the last mesh predicts the next one to about
+    +-7 % (measured: ``python benchmarks/adaptivity_cost.py``); pass one instance to every
+    :func:`remesh` of a run.
+    """
+
+    value: float = VERTEX_DENSITY
+    measured: bool = False
+
+    def update(self, vertices: int, integral: float) -> None:
+        """Record the count of a mesh made for a field whose ``int h^-d dx`` is ``integral``."""
+        if integral > 0:
+            self.value, self.measured = vertices / integral, True
+
 NETGEN_GRADING = 0.3
 """Netgen's default grading: its local h grows at most like ``h + 0.3 * distance``."""
 
@@ -437,7 +461,7 @@ def _bisect(fits: Callable[[float], bool], lo: float, hi: float, rtol: float = 1
 def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, hmax: float,
            max_vertices: int, weights: np.ndarray | None = None,
            grading: float = NETGEN_GRADING, optimize_steps: int = 1,
-           max_attempts: int = 8) -> ngs.Mesh:
+           max_attempts: int = 8, density: VertexDensity | None = None) -> ngs.Mesh:
     """Generate a new mesh of ``geometry`` that follows a sampled size field.
 
     Sizes are capped with :func:`cap_vertices` (predicted count <= 0.95 ``max_vertices``),
@@ -468,6 +492,9 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
         Netgen's ``optsteps2d``; 1 halves the time of the default 3 at nearly equal quality.
     max_attempts : int
         Generations before giving up with a ``RuntimeError``.
+    density : VertexDensity, optional
+        The run's learned vertex-count constant: used for the prediction and updated with the
+        mesh made. Without it every call starts from :data:`VERTEX_DENSITY`.
 
     Returns
     -------
@@ -483,21 +510,21 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
     ngeo = netgen_geometry(geometry) if isinstance(geometry, Geometry) else geometry
     if weights is None:
         weights = voronoi_weights(points)
-    density = VERTEX_DENSITY
-    margin = 0.95
+    learned = density if density is not None else VertexDensity()
+    margin = LEARNED_MARGIN if learned.measured else 0.95
     for attempt in range(1, max_attempts + 1):
         current = cap_vertices(sizes, weights, margin * max_vertices, hmax=hmax,
-                               density=density, dim=dim)
+                               density=learned.value, dim=dim)
         started = time.perf_counter()
         ngmesh = _generate(ngeo, points, current, maxh=max(hmax, float(current.max())),
                            grading=grading, optimize_steps=optimize_steps)
         nv = len(ngmesh.Points())
         integral = predict_vertices(current, weights, density=1.0, dim=dim)
         log.info("remesh attempt %d: %d vertices (cap %d, predicted %.0f) in %.2f s", attempt, nv,
-                 max_vertices, density * integral, time.perf_counter() - started)
+                 max_vertices, learned.value * integral, time.perf_counter() - started)
+        learned.update(nv, integral)
         if nv <= max_vertices:
             return ngs.Mesh(ngmesh)
-        density = nv / integral
         margin *= 0.95
     raise RuntimeError(f"remesh: no mesh with <= {max_vertices} vertices after {max_attempts} "
                        f"attempts (last had {nv}); raise max_vertices or hmax")
@@ -529,7 +556,8 @@ def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray
 
 
 def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Any, sizes: np.ndarray, *, hmax: float,
-               max_vertices: int, grading: float = NETGEN_GRADING) -> ngs.Mesh:
+               max_vertices: int, grading: float = NETGEN_GRADING,
+               density: VertexDensity | None = None) -> ngs.Mesh:
     """Grade, cap, sample and remesh: the new mesh for element sizes given on ``mesh``.
 
     The cap is applied here on the elements, with grading inside the prediction (a steep
@@ -544,13 +572,15 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Any, sizes: np.ndarray, *, h
     sizes : (ne,) array
         Requested sizes, e.g. from :func:`size_field_from_indicator` and
         :func:`enforce_crack_sizes`.
-    hmax, max_vertices, grading
+    hmax, max_vertices, grading, density
         As in :func:`remesh`.
     """
     geom = ElementGeometry.of(mesh)
     grade = element_grader(geom, grading)
-    capped = cap_vertices(np.minimum(sizes, hmax), geom.measures, 0.95 * max_vertices, hmax=hmax,
-                          dim=geom.dim, grade=grade)
+    learned = density if density is not None else VertexDensity()
+    margin = LEARNED_MARGIN if learned.measured else 0.95
+    capped = cap_vertices(np.minimum(sizes, hmax), geom.measures, margin * max_vertices, hmax=hmax,
+                          density=learned.value, dim=geom.dim, grade=grade)
     field = _sample(geom, capped)
     return remesh(geometry, field.points, field.sizes, weights=field.weights, hmax=hmax,
-                  max_vertices=max_vertices, grading=grading)
+                  max_vertices=max_vertices, grading=grading, density=learned)
