@@ -180,6 +180,9 @@ class Material(_Section):
     gamma: Expression = Expression("1.0")
     body_force: Expression | Components = Expression("0.0")
     """Body force f, expressions in x, y, t (mode III: out of plane)."""
+    split: str = "none"
+    """Tension/compression split of the elastic energy: "none" (the paper's model), "amor"
+    (volumetric-deviatoric) or "miehe" (spectral); see :mod:`ngfrac.splits`."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -202,6 +205,8 @@ class Material(_Section):
             raise SceneError(f"material.body_force = {self.body_force.text!r} uses z, but the domain is 2D")
         if "t" in self.gamma.names:
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
+        _require(self.split in ("none", "amor", "miehe"), s, "split", self.split,
+                 "choose 'none' (the paper's model), 'amor' or 'miehe'")
 
     @property
     def moduli(self) -> tuple[str, ...]:
@@ -513,12 +518,23 @@ class Scene:
             if "z" in load.value.names:
                 raise SceneError(f"loads[{i}].value = {load.value.text!r} uses z, but the domain is 2D")
         self.model.check(self.material, self.loads)
+        self._check_split()
         for i, crack in enumerate(self.cracks):
             for point in crack.points:
                 if not self.geometry.contains(point):
                     raise SceneError(f"cracks[{i}].points: point {list(point)} lies outside the "
                                      f"domain {self._domain_text()}")
         self._check_gamma_positive()
+
+    def _check_split(self) -> None:
+        """A split needs a vector model; the spectral one is 2D only (ngfrac.splits)."""
+        split, kind = self.material.split, self.model.kind
+        if split != "none" and kind == "mode3":
+            raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
+                             "model.kind = 'mode3' has no tension or compression: set split = 'none'")
+        if split == "miehe" and kind not in ("plane_strain", "plane_stress"):
+            raise SceneError(f"material.split = 'miehe' is implemented for the plane models only, "
+                             f"not model.kind = {kind!r}: use split = 'amor' in 3D")
 
     def _domain_text(self) -> str:
         x0, y0 = self.geometry.origin

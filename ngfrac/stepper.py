@@ -31,6 +31,7 @@ from .nodal import LagrangeNodes
 from .profiling import PhaseTimer
 from .reactions import reaction_columns
 from .scene import Scene
+from .splits import NewtonSolver, make_split
 from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
@@ -161,6 +162,9 @@ class PhaseFieldStepper:
         self.dx = dx
         u, v = self.fes_u.TnT()
         stiffness = ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v)
+        self.split = make_split(self.model, sc.material.split)
+        if self.split is not None:  # nonlinear: a_u is the tangent at the current u (ngfrac.splits)
+            stiffness = self.split.tangent(self.u, u, v, self.z, pf.residual_stiffness)
         if pf.alpha1 > 0:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
@@ -171,9 +175,12 @@ class PhaseFieldStepper:
         self._inv_u = None
         self.body_force = self.model.body_force(sc.material, self.time)
         self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
+        if self.split is not None:
+            self._newton = self._newton_solver(self.a_u, pf.alpha1)
 
         drive = self.u_prev if disc.coupling == "paper" else self.u
-        self._drive = self.model.energy_density(drive)
+        self._drive = (self.model.energy_density(drive) if self.split is None
+                       else self.split.drive(drive))  # 2 psi+ with a split
         zt, w = self.fes_z.TnT()
         gamma, eps = self.gamma, pf.epsilon
         self.a_z = ngs.BilinearForm(self.fes_z, symmetric=True)
@@ -192,6 +199,11 @@ class PhaseFieldStepper:
         self.time.Set(0.0)
         self.u.vec[:] = 0.0
         self._apply_boundary_values()
+        if self.split is not None:
+            self._solve_u_split(initial=True)
+            self.u_prev.vec.data = self.u.vec
+            self.forces = reaction_columns(self)
+            return
         pf = self.scene.phase_field
         u, v = self.fes_u.TnT()
         static = ngs.BilinearForm(self.fes_u, symmetric=True)
@@ -292,6 +304,9 @@ class PhaseFieldStepper:
 
     def solve_u(self) -> None:
         """The u-sub-step for the current z (z^{k-1} inside a step) and the current time."""
+        if self.split is not None:
+            self._solve_u_split()
+            return
         with self.timer.phase("u: assemble"):
             self.a_u.Assemble()
             if self.f_u is not None:
@@ -317,6 +332,54 @@ class PhaseFieldStepper:
             raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "
                               f"(t={self.time.Get():g}); "
                               "raise phase_field.residual_stiffness or lower time.dt")
+
+    def _solve_u_split(self, initial: bool = False) -> None:
+        """The u-sub-step with a tension/compression split: Newton on the energy
+        (:mod:`ngfrac.splits`); ``initial``: the static problem at t = 0 (no alpha1 term)."""
+        self._apply_boundary_values()
+        newton = self._newton
+        rhs = self.u.vec.CreateVector()
+        rhs[:] = 0.0
+        if initial:  # the static problem: the tangent without the alpha1 term
+            u, v = self.fes_u.TnT()
+            static = ngs.BilinearForm(self.fes_u, symmetric=True)
+            static += self.split.tangent(self.u, u, v, self.z,
+                                         self.scene.phase_field.residual_stiffness) * self.dx
+            newton = self._newton_solver(static, 0.0)
+        elif self.m_u is not None:
+            rhs.data = self.inv_dt.Get() * (self.m_u.mat * self.u_prev.vec)
+        if self.f_u is not None:
+            self.f_u.Assemble()
+            rhs.data += self.f_u.vec
+        with self.timer.phase("u: newton"):
+            try:
+                self.newton = newton.solve(rhs)
+            except RuntimeError as err:
+                raise SolverError(f"the u-solve (material.split = {self.scene.material.split!r}) "
+                                  f"failed at step {self.k + 1} (t={self.time.Get():g}): {err}; "
+                                  "lower time.dt") from None
+            if initial:  # a_u.mat, the tangent at u, gives the reactions (ngfrac.reactions)
+                self.a_u.Assemble()
+        if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
+            raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "
+                              f"(t={self.time.Get():g}); lower time.dt")
+
+    def _newton_solver(self, tangent: ngs.BilinearForm, alpha1: float) -> NewtonSolver:
+        """Newton for the split u-problem with this tangent; alpha1 > 0 adds the energy of
+        the alpha1 term (its linear part is the solve's right-hand side)."""
+        energy = self.split.elastic_density(self.u, self.z, self.scene.phase_field.residual_stiffness)
+        if alpha1 > 0:
+            energy = energy + 0.5 * alpha1 * self.inv_dt * ngs.InnerProduct(self.u, self.u)
+        return NewtonSolver(tangent, self.u, energy, self.integration_order,
+                            self.fes_u.FreeDofs(), self.scene.discretization.u_solver)
+
+    def _elastic_density(self) -> ngs.CoefficientFunction:
+        """W with E_el = 1/2 int ((1-z)^2 + eta) W: sigma:e, or with a split
+        2 (((1-z)^2 + eta) psi+ + psi-) / ((1-z)^2 + eta)."""
+        if self.split is None:
+            return self.model.energy_density(self.u)
+        eta = self.scene.phase_field.residual_stiffness
+        return 2 * self.split.elastic_density(self.u, self.z, eta) / ((1 - self.z) ** 2 + eta)
 
     def _solve_z(self) -> int:
         """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
@@ -447,7 +510,7 @@ class PhaseFieldStepper:
             return StepRecord(**base)
         pf = self.scene.phase_field
         with ngs.TaskManager(), self.timer.phase("diagnostics: energies, tip"):
-            e = energies(self.mesh, self.z, self.model.energy_density(self.u), self.gamma,
+            e = energies(self.mesh, self.z, self._elastic_density(), self.gamma,
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
                          order=self.integration_order)
