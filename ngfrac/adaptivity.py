@@ -16,6 +16,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import ngsolve as ngs
@@ -57,7 +58,12 @@ class AdaptivitySizes:
         a, eps, g = scene.adaptivity, scene.phase_field.epsilon, scene.geometry
         h_crack = max(a.hmin, a.h_crack or eps / 10)
         h_band = max(a.hmin, a.h_band or eps / 4)
-        return cls(hmin=a.hmin, hmax=a.hmax or min(g.width, g.height) / 10, h_crack=h_crack,
+        coarse = min(g.width, g.height) / 10
+        if g.dim == 3:  # the uniform start mesh of hmax must fit well under the cap
+            from .meshing3d import VERTEX_DENSITY_3D
+            volume = g.width * g.height * g.depth
+            coarse = max(g.shortest_side / 4, (4 * VERTEX_DENSITY_3D * volume / a.max_vertices) ** (1 / 3))
+        return cls(hmin=a.hmin, hmax=a.hmax or coarse, h_crack=h_crack,
                    h_band=h_band, h_tip=max(a.hmin, a.h_tip or h_band),
                    tip_margin=a.tip_margin or 4 * eps)
 
@@ -193,8 +199,12 @@ class MeshAdapter:
         # Netgen gets sizes / SIZE_RATIO (it realizes graded fields coarser than asked); a
         # floor of hmin * SIZE_RATIO keeps what it is asked for at or above hmin.
         sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
-        new = adapt_mesh(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
-                         max_vertices=self.settings.max_vertices, density=self.density)
+        if mesh.dim == 3:  # 3D constants and Netgen options: ngfrac.meshing3d
+            from .meshing3d import adapt_mesh_3d as adapt
+        else:
+            adapt = partial(adapt_mesh, density=self.density)
+        new = adapt(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
+                    max_vertices=self.settings.max_vertices)
         done = time.perf_counter()
         return new, {"estimate_s": estimated - started, "mark_s": marked - estimated,
                      "remesh_s": done - marked}

@@ -1,7 +1,8 @@
-"""Initial cracks: distance to polylines, the optimal profile exp(-d/epsilon), the tip."""
+"""Initial cracks: distance to polylines (2D) or filled planar polygons (3D), the optimal
+profile exp(-d/epsilon), the tip."""
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -31,6 +32,78 @@ def distance_to_polylines(points: np.ndarray, polylines: Sequence[Sequence[Seque
     return best
 
 
+def distance_to_polygons(points: np.ndarray, polygons: Sequence[Sequence[Sequence[float]]]) -> np.ndarray:
+    """Euclidean distance from each 3D point to the union of filled planar polygons.
+
+    For a point whose projection onto a polygon's plane falls inside the polygon the distance
+    is the offset from the plane; otherwise it is the distance to the polygon's boundary
+    (the closed polyline of its corners).
+
+    Parameters
+    ----------
+    points : (n, 3) array
+    polygons : list of lists of 3D points
+        Each polygon has at least three corners, in order around it, and is planar.
+    """
+    points = np.asarray(points, dtype=float)
+    best = np.full(len(points), np.inf)
+    for polygon in polygons:
+        corners = np.asarray(polygon, dtype=float)
+        normal = 0.5 * np.cross(corners, np.roll(corners, -1, axis=0)).sum(axis=0)
+        normal /= np.linalg.norm(normal)
+        # an orthonormal frame (e1, e2) of the plane, for the point-in-polygon test
+        e1 = corners[1] - corners[0]
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(normal, e1)
+        offset = (points - corners[0]) @ normal
+        inside = _inside_polygon(np.column_stack([(points - corners[0]) @ e1, (points - corners[0]) @ e2]),
+                                 np.column_stack([(corners - corners[0]) @ e1, (corners - corners[0]) @ e2]))
+        edge = distance_to_polylines(points, [np.vstack([corners, corners[:1]])])
+        np.minimum(best, np.where(inside, np.abs(offset), edge), out=best)
+    return best
+
+
+def _inside_polygon(points: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """Even-odd rule for (n, 2) points in a simple polygon with (m, 2) corners."""
+    inside = np.zeros(len(points), dtype=bool)
+    x, y = points[:, 0], points[:, 1]
+    for (xa, ya), (xb, yb) in zip(corners, np.roll(corners, -1, axis=0)):
+        crosses = (ya > y) != (yb > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_cross = xa + (y - ya) * (xb - xa) / (yb - ya)
+        inside ^= crosses & (x < x_cross)
+    return inside
+
+
+def distance_to_cracks(points: np.ndarray, cracks: Sequence[Sequence[Sequence[float]]]) -> np.ndarray:
+    """Distance to the initial cracks: polylines for 2D points, filled polygons for 3D points."""
+    points = np.asarray(points, dtype=float)
+    if points.shape[1] == 3:
+        return distance_to_polygons(points, cracks)
+    return distance_to_polylines(points, cracks)
+
+
+def initial_tip(crack: Sequence[Sequence[float]],
+                on_boundary: Callable[[np.ndarray], bool] | None = None) -> np.ndarray:
+    """Where the tip of an initial crack is before it grows.
+
+    2D: the last point of the polyline (written from the mouth to the tip). 3D: the middle
+    of the crack front, i.e. the mean of the midpoints of the polygon's edges that do not lie
+    on the domain boundary (``on_boundary`` tells, at an edge's midpoint), weighted by length;
+    all edges if none is on the boundary (an interior crack: its centre).
+    """
+    corners = np.asarray(crack, dtype=float)
+    if corners.shape[1] == 2:
+        return corners[-1]
+    ends = np.roll(corners, -1, axis=0)
+    middles = 0.5 * (corners + ends)
+    lengths = np.linalg.norm(ends - corners, axis=1)
+    front = np.array([not (on_boundary and on_boundary(m)) for m in middles])
+    if not front.any():
+        front[:] = True
+    return (middles[front] * lengths[front, None]).sum(axis=0) / lengths[front].sum()
+
+
 def optimal_profile(distance: np.ndarray, epsilon: float) -> np.ndarray:
     """z = exp(-d/epsilon): the 1D minimizer of the surface energy with z = 1 on the crack."""
     return np.exp(-np.asarray(distance) / epsilon)
@@ -38,19 +111,23 @@ def optimal_profile(distance: np.ndarray, epsilon: float) -> np.ndarray:
 
 def crack_tip(points: np.ndarray, z_values: np.ndarray,
               polylines: Sequence[Sequence[Sequence[float]]], band: float,
-              threshold: float = 0.5) -> np.ndarray:
+              threshold: float = 0.5, start: np.ndarray | None = None) -> np.ndarray:
     """The crack tip: the point of {z >= threshold} farthest from the initial crack set.
 
     Points within ``band`` of the initial cracks belong to the initial crack's own band, so
-    while nothing lies beyond it the tip is the last point of the first polyline (write crack
-    points from the mouth to the tip). Returns NaNs when nothing is cracked at all.
+    while nothing lies beyond it the tip is ``start`` (default: the last point of the first
+    polyline; write crack points from the mouth to the tip). Returns NaNs when nothing is
+    cracked at all. In 3D the initial cracks are polygons (:func:`distance_to_polygons`)
+    and ``start`` is :func:`initial_tip` of the first one.
 
     Parameters
     ----------
     points, z_values : node coordinates (n, d) and node values of z
-    polylines : the initial cracks
+    polylines : the initial cracks (2D polylines or 3D polygons)
     band : float
         Half width of the initial band, e.g. ``epsilon*ln(1/threshold) + h``.
+    start : (d,) array, optional
+        The tip before the crack grows.
     """
     cracked = np.asarray(z_values) >= threshold
     if not polylines:
@@ -58,10 +135,10 @@ def crack_tip(points: np.ndarray, z_values: np.ndarray,
             return np.full(points.shape[1], np.nan)
         candidates = points[cracked]
         return candidates[int(np.argmax(np.linalg.norm(candidates - candidates[0], axis=1)))]
-    initial_tip = np.asarray(polylines[0][-1], dtype=float)
+    first = np.asarray(polylines[0][-1] if start is None else start, dtype=float)
     if not np.any(cracked):
-        return initial_tip
+        return first
     candidates = points[cracked]
-    distance = distance_to_polylines(candidates, polylines)
+    distance = distance_to_cracks(candidates, polylines)
     farthest = int(np.argmax(distance))
-    return candidates[farthest] if distance[farthest] > band else initial_tip
+    return candidates[farthest] if distance[farthest] > band else first

@@ -145,7 +145,7 @@ class Elasticity:
             component.Set(cf[i], ngs.BND)
 
     def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
-        """f = [fx, fy] as a vector CoefficientFunction, or None when it is zero."""
+        """f = [fx, fy] (3D: [fx, fy, fz]) as a vector CoefficientFunction, or None when zero."""
         force = material.body_force
         if not isinstance(force, Components):
             return None  # a scalar body force is only allowed when it is 0 (Model.check)
@@ -179,6 +179,24 @@ class PlaneStress(Elasticity):
         self.lam_3d = lam
 
 
+class Elasticity3D(Elasticity):
+    """3D elasticity on a box: u = (ux, uy, uz), ``sigma = 2 mu e + lam tr(e) I``.
+
+    Loads give ``[ux, uy, uz]`` (each component may be ``"free"``) and reactions are
+    reported as Fx, Fy, Fz.
+
+    Parameters
+    ----------
+    lam, mu : float
+        The Lame constants.
+    """
+
+    name = "elasticity_3d"
+
+    def __init__(self, lam: float, mu: float) -> None:
+        super().__init__(lam, mu, dim=3)
+
+
 def make_model(scene: Scene) -> AntiPlane | Elasticity:
     """The elastic model the scene asks for (checks that loads and moduli fit it)."""
     scene.model.check(scene.material, scene.loads)
@@ -189,4 +207,6 @@ def make_model(scene: Scene) -> AntiPlane | Elasticity:
         return PlaneStrain(*scene.material.lame)
     if kind == "plane_stress":
         return PlaneStress(*scene.material.lame)
+    if kind == "elasticity_3d":
+        return Elasticity3D(*scene.material.lame)
     raise ValueError(f"model {kind!r} is not implemented")  # scene validation prevents this

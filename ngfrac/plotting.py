@@ -60,8 +60,13 @@ def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: 
     """The phase field z on the mesh (vertex values, linear per triangle).
 
     ``mesh`` is an NGSolve mesh or a pair (coordinates, triangles); ``path`` an optional
-    (n, 2) array of tip positions drawn on top.
+    (n, 2) array of tip positions drawn on top. A 3D NGSolve mesh gives the two panels of
+    :func:`ngfrac.plotting3d.plot_phase_field_3d` (``path`` may then have a z column).
     """
+    if not isinstance(mesh, tuple) and mesh.dim == 3:
+        from .plotting3d import plot_phase_field_3d
+
+        return plot_phase_field_3d(mesh, z_vertex_values, png, title=title, path=path)
     plt = _pyplot()
     if isinstance(mesh, tuple):
         coords, triangles = np.asarray(mesh[0]), np.asarray(mesh[1])

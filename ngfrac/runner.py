@@ -53,7 +53,7 @@ def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
 
     plot_history(out / "history.csv", out / "history.png")
     history = read_history(out / "history.csv")
-    tips = np.c_[history["tip_x"], history["tip_y"]]
+    tips = np.column_stack([history[c] for c in ("tip_x", "tip_y", "tip_z") if c in history])
     z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
     plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
                      title=f"{stepper.scene.name}: z at t = {stepper.t:.4g}",

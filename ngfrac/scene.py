@@ -22,8 +22,16 @@ import numpy as np
 
 from .expressions import Expression, ExpressionError
 
-MODELS = ("mode3", "plane_strain", "plane_stress")
+MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
 """Model names a scene may choose (``model.kind``)."""
+
+MODELS_3D = ("elasticity_3d",)
+"""Models of a 3D domain (``geometry.kind = "box"``); the others are 2D."""
+
+
+def _vector_text(name: str, n: int) -> str:
+    """``[ux, uy]`` or ``[ux, uy, uz]`` for n = 2, 3 (``name`` = "u" or "f")."""
+    return "[" + ", ".join(f"{name}{c}" for c in "xyz"[:n]) + "]"
 
 
 class SceneError(ValueError):
@@ -108,6 +116,7 @@ class Model(_Section):
     ``mode3``: anti-plane shear, u scalar (out of plane). ``plane_strain`` and
     ``plane_stress``: u = (ux, uy) in the plane, ``sigma = 2 mu e + lambda tr(e) I`` with the 3D
     Lame constants (plane strain) or ``lambda* = 2 lambda mu / (lambda + 2 mu)`` (plane stress).
+    ``elasticity_3d``: u = (ux, uy, uz) on a 3D domain (``geometry.kind = "box"``).
     """
 
     SECTION: ClassVar[str] = "model"
@@ -122,8 +131,8 @@ class Model(_Section):
 
     @property
     def n_components(self) -> int:
-        """Components of u: 1 for mode III, 2 for the plane models."""
-        return 1 if self.kind == "mode3" else 2
+        """Components of u: 1 for mode III, 2 for the plane models, 3 in 3D."""
+        return 1 if self.kind == "mode3" else 3 if self.kind in MODELS_3D else 2
 
     def check(self, material: "Material", loads: tuple["Load", ...]) -> None:
         """What spans sections: loads, body force and moduli must fit the model.
@@ -137,22 +146,23 @@ class Model(_Section):
                 raise SceneError(f"loads[{i}].value = {load.value.text} is a list, but model.kind = "
                                  "'mode3' takes one expression (the out-of-plane displacement)")
             if n > 1 and not isinstance(load.value, Components):
+                example = ", ".join(['\"0\"'] * (n - 1) + ['\"10*t\"'])
                 raise SceneError(f"loads[{i}].value = {load.value.text!r} is one expression, but "
-                                 f"model.kind = {kind!r} needs [ux, uy], e.g. [\"0\", \"10*t\"] "
-                                 "(\"free\" leaves a component unconstrained)")
+                                 f"model.kind = {kind!r} needs {_vector_text('u', n)}, e.g. "
+                                 f"[{example}] (\"free\" leaves a component unconstrained)")
             if n > 1 and len(load.value) != n:
                 raise SceneError(f"loads[{i}].value = {load.value.text} has {len(load.value)} "
-                                 f"entries, but model.kind = {kind!r} needs {n}: [ux, uy]")
+                                 f"entries, but model.kind = {kind!r} needs {n}: {_vector_text('u', n)}")
         force = material.body_force
         if n == 1 and isinstance(force, Components):
             raise SceneError(f"material.body_force = {force.text} is a list, but model.kind = "
                              "'mode3' takes one expression (the out-of-plane force)")
         if n > 1 and not isinstance(force, Components) and not (force.is_constant and force.value() == 0):
             raise SceneError(f"material.body_force = {force.text!r} is one expression, but "
-                             f"model.kind = {kind!r} needs [fx, fy]")
+                             f"model.kind = {kind!r} needs {_vector_text('f', n)}")
         if n > 1 and isinstance(force, Components) and len(force) != n:
             raise SceneError(f"material.body_force = {force.text} has {len(force)} entries, but "
-                             f"model.kind = {kind!r} needs {n}: [fx, fy]")
+                             f"model.kind = {kind!r} needs {n}: {_vector_text('f', n)}")
         if n > 1 and material.moduli not in (("mu", "lam"), ("E", "nu")):
             given = ", ".join(material.moduli) or "none"
             raise SceneError(f"material: model.kind = {kind!r} needs the elastic moduli lam and mu, "
@@ -201,8 +211,6 @@ class Material(_Section):
         if isinstance(self.body_force, Components):
             _require(len(self.body_force) > 0 and not any(self.body_force.free), s, "body_force",
                      self.body_force.text, "give one expression per component, none 'free'")
-        if "z" in self.body_force.names:
-            raise SceneError(f"material.body_force = {self.body_force.text!r} uses z, but the domain is 2D")
         if "t" in self.gamma.names:
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
         _require(self.split in ("none", "amor", "miehe"), s, "split", self.split,
@@ -257,55 +265,129 @@ class PhaseField(_Section):
 
 @dataclass(frozen=True)
 class Geometry(_Section):
-    """The domain: an axis-parallel rectangle with boundaries bottom, right, top, left."""
+    """The domain: an axis-parallel rectangle (2D) or box (3D).
+
+    ``rectangle``: [x0, x0 + width] x [y0, y0 + height], boundaries bottom (y = y0), right,
+    top, left. ``box``: [x0, x0 + width] x [y0, y0 + height] x [z0, z0 + depth], faces left
+    (x = x0), right (x = x0 + width), bottom (y = y0), top (y = y0 + height), back (z = z0),
+    front (z = z0 + depth).
+    """
 
     SECTION: ClassVar[str] = "geometry"
+    KINDS: ClassVar[tuple[str, ...]] = ("rectangle", "box")
     BOUNDARIES: ClassVar[tuple[str, ...]] = ("bottom", "right", "top", "left")
+    BOUNDARIES_3D: ClassVar[tuple[str, ...]] = ("left", "right", "bottom", "top", "back", "front")
     width: float = REQUIRED  # type: ignore[assignment]
     height: float = REQUIRED  # type: ignore[assignment]
     kind: str = "rectangle"
     origin: tuple[float, ...] = (0.0, 0.0)
+    depth: float = 0.0
+    """Extent in z of a box; 0 (not given) for a rectangle."""
     mesh_size: float = 0.0
     """Uniform maximal element size; 0 means epsilon/2."""
 
     def validate(self) -> None:
         s = self.SECTION
-        _require(self.kind == "rectangle", s, "kind", self.kind, "only 'rectangle' is available")
+        _require(self.kind in self.KINDS, s, "kind", self.kind,
+                 "choose 'rectangle' (2D) or 'box' (3D)")
         _require(self.width > 0, s, "width", self.width, "must be > 0")
         _require(self.height > 0, s, "height", self.height, "must be > 0")
-        _require(len(self.origin) == 2, s, "origin", list(self.origin), "give [x, y]")
+        if self.kind == "box":
+            if self.origin is Geometry.__dataclass_fields__["origin"].default:
+                object.__setattr__(self, "origin", (0.0, 0.0, 0.0))  # not given: the 3D zero
+            _require(len(self.origin) == 3, s, "origin", list(self.origin),
+                     "a box needs [x, y, z]")
+            _require(self.depth > 0, s, "depth", self.depth, "a box needs depth > 0")
+        else:
+            _require(len(self.origin) == 2, s, "origin", list(self.origin), "give [x, y]")
+            _require(self.depth == 0, s, "depth", self.depth,
+                     "only a box has a depth; set geometry.kind = 'box' or remove depth")
         _require(self.mesh_size >= 0, s, "mesh_size", self.mesh_size,
                  "must be > 0 (or 0 for epsilon/2)")
 
     @property
+    def dim(self) -> int:
+        """2 for a rectangle, 3 for a box."""
+        return 3 if self.kind == "box" else 2
+
+    @property
+    def extent(self) -> tuple[float, ...]:
+        """(width, height) or (width, height, depth)."""
+        return (self.width, self.height, self.depth)[: self.dim]
+
+    @property
+    def shortest_side(self) -> float:
+        return min(self.extent)
+
+    @property
     def boundary_names(self) -> tuple[str, ...]:
-        return self.BOUNDARIES
+        return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
 
-    def contains(self, point: tuple[float, float], tol: float = 1e-12) -> bool:
-        """Whether a point lies in the closed rectangle."""
-        x0, y0 = self.origin
-        px, py = point
-        return (x0 - tol <= px <= x0 + self.width + tol) and (y0 - tol <= py <= y0 + self.height + tol)
+    def contains(self, point: tuple[float, ...], tol: float = 1e-12) -> bool:
+        """Whether a point (of the domain's dimension) lies in the closed rectangle or box."""
+        if len(point) != self.dim:
+            return False
+        return all(o - tol <= p <= o + e + tol for p, o, e in zip(point, self.origin, self.extent))
 
-    def sample_points(self, n: int = 201) -> tuple[np.ndarray, np.ndarray]:
-        """A regular n-by-n grid over the rectangle, for checking expressions."""
-        x0, y0 = self.origin
-        xs, ys = np.meshgrid(np.linspace(x0, x0 + self.width, n), np.linspace(y0, y0 + self.height, n))
-        return xs.ravel(), ys.ravel()
+    def sample_points(self, n: int = 0) -> tuple[np.ndarray, ...]:
+        """A regular grid over the domain, for checking expressions: (xs, ys) or (xs, ys, zs).
+
+        ``n`` points per side; 0 means 201 in 2D and 41 in 3D.
+        """
+        n = n or (201 if self.dim == 2 else 41)
+        axes = [np.linspace(o, o + e, n) for o, e in zip(self.origin, self.extent)]
+        return tuple(a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
 
 
 @dataclass(frozen=True)
 class Crack(_Section):
-    """An initial crack: a polyline; the initial phase field is exp(-dist/epsilon)."""
+    """An initial crack; the initial phase field is exp(-dist/epsilon).
+
+    2D: a polyline ``[[x, y], ...]`` (at least two points, from the mouth to the tip).
+    3D: a planar polygon ``[[x, y, z], ...]`` (at least three corners, in order around it);
+    the crack is the filled polygon and dist the distance to it.
+    """
 
     SECTION: ClassVar[str] = "cracks"
+    PLANAR_TOL: ClassVar[float] = 1e-9
     points: tuple[tuple[float, ...], ...] = REQUIRED  # type: ignore[assignment]
 
     def validate(self) -> None:
-        _require(len(self.points) >= 2, self.SECTION, "points", self.points,
+        s = self.SECTION
+        _require(len(self.points) >= 2, s, "points", self.points,
                  "a crack needs at least two points [[x0, y0], [x1, y1], ...]")
+        dim = len(self.points[0])
         for point in self.points:
-            _require(len(point) == 2, self.SECTION, "points", point, "each point is [x, y]")
+            _require(len(point) in (2, 3) and len(point) == dim, s, "points", list(point),
+                     "each point is [x, y] (2D) or [x, y, z] (3D), all of the same length")
+        if dim == 3:
+            _require(len(self.points) >= 3, s, "points", [list(p) for p in self.points],
+                     "a 3D crack is a planar polygon with at least three corners [[x, y, z], ...]")
+            corners = np.asarray(self.points, dtype=float)
+            normal = self.normal
+            size = float(np.ptp(corners, axis=0).max())
+            _require(float(np.linalg.norm(normal)) > 0, s, "points",
+                     [list(p) for p in self.points],
+                     "the polygon has no area; give corners that span a plane")
+            offsets = np.abs((corners - corners[0]) @ normal)
+            _require(offsets.max() <= self.PLANAR_TOL * size, s, "points",
+                     [list(p) for p in self.points],
+                     f"a 3D crack must be planar (a corner is {offsets.max():.3g} off the plane "
+                     "of the others)")
+
+    @property
+    def dim(self) -> int:
+        return len(self.points[0])
+
+    @property
+    def normal(self) -> np.ndarray:
+        """Unit normal of a 3D polygon (Newell's method); zeros if it has no area."""
+        corners = np.asarray(self.points, dtype=float)
+        nxt = np.roll(corners, -1, axis=0)
+        normal = 0.5 * np.cross(corners, nxt).sum(axis=0)
+        length = float(np.linalg.norm(normal))
+        scale = float(np.ptp(corners, axis=0).max()) ** 2
+        return normal / length if length > 1e-12 * scale else np.zeros(3)
 
 
 @dataclass(frozen=True)
@@ -503,6 +585,7 @@ class Scene:
 
     def __post_init__(self) -> None:
         names = self.geometry.boundary_names
+        self._check_dimension()
         if not self.loads:
             raise SceneError("loads: a scene needs at least one [[loads]] entry (a Dirichlet boundary)")
         seen = set()
@@ -515,16 +598,34 @@ class Scene:
             if load.boundary in seen:
                 raise SceneError(f"loads[{i}].boundary = {load.boundary!r} is loaded twice")
             seen.add(load.boundary)
-            if "z" in load.value.names:
+            if "z" in load.value.names and self.geometry.dim == 2:
                 raise SceneError(f"loads[{i}].value = {load.value.text!r} uses z, but the domain is 2D")
+        if "z" in self.material.body_force.names and self.geometry.dim == 2:
+            raise SceneError(f"material.body_force = {self.material.body_force.text!r} uses z, "
+                             "but the domain is 2D")
         self.model.check(self.material, self.loads)
         self._check_split()
         for i, crack in enumerate(self.cracks):
+            if crack.dim != self.geometry.dim:
+                example = "[[x, y, z], ...] (a planar polygon)" if self.geometry.dim == 3 else "[[x, y], ...]"
+                raise SceneError(f"cracks[{i}].points = {[list(p) for p in crack.points]} has "
+                                 f"{crack.dim}D points, but geometry.kind = {self.geometry.kind!r} "
+                                 f"is {self.geometry.dim}D: give {example}")
             for point in crack.points:
                 if not self.geometry.contains(point):
                     raise SceneError(f"cracks[{i}].points: point {list(point)} lies outside the "
                                      f"domain {self._domain_text()}")
         self._check_gamma_positive()
+
+    def _check_dimension(self) -> None:
+        """A 3D model needs a box, a box needs a 3D model."""
+        kind, geometry = self.model.kind, self.geometry.kind
+        if kind in MODELS_3D and self.geometry.dim != 3:
+            raise SceneError(f"model.kind = {kind!r} is 3D but geometry.kind = {geometry!r} is 2D; "
+                             "set geometry.kind = 'box' (with depth)")
+        if kind not in MODELS_3D and self.geometry.dim == 3:
+            raise SceneError(f"geometry.kind = {geometry!r} is 3D but model.kind = {kind!r} is 2D; "
+                             f"set model.kind = {MODELS_3D[0]!r}")
 
     def _check_split(self) -> None:
         """A split needs a vector model; the spectral one is 2D only (ngfrac.splits)."""
@@ -537,21 +638,24 @@ class Scene:
                              f"not model.kind = {kind!r}: use split = 'amor' in 3D")
 
     def _domain_text(self) -> str:
-        x0, y0 = self.geometry.origin
-        return f"[{x0}, {x0 + self.geometry.width}] x [{y0}, {y0 + self.geometry.height}]"
+        return " x ".join(f"[{o}, {o + e}]" for o, e in zip(self.geometry.origin, self.geometry.extent))
 
     def _check_gamma_positive(self) -> None:
         gamma = self.material.gamma
-        if "z" in gamma.names:
+        dim = self.geometry.dim
+        if "z" in gamma.names and dim == 2:
             raise SceneError(f"material.gamma = {gamma.text!r} uses z, but the domain is 2D")
-        xs, ys = self.geometry.sample_points()
-        values = np.broadcast_to(gamma.evaluate_numpy({"x": xs, "y": ys}), xs.shape)
+        coordinates = self.geometry.sample_points()
+        names = "xyz"[:dim]
+        values = np.broadcast_to(gamma.evaluate_numpy(dict(zip(names, coordinates))),
+                                 coordinates[0].shape)
         if not np.all(np.isfinite(values)):
             raise SceneError(f"material.gamma = {gamma.text!r} is not finite everywhere in the domain")
         worst = int(np.argmin(values))
         if values[worst] <= 0:
+            where = ", ".join(f"{c[worst]:.3g}" for c in coordinates)
             raise SceneError(f"material.gamma = {gamma.text!r} is {values[worst]:.3g} <= 0 at "
-                             f"(x, y) = ({xs[worst]:.3g}, {ys[worst]:.3g}); the toughness must be "
+                             f"({', '.join(names)}) = ({where}); the toughness must be "
                              "> 0 everywhere")
 
     @property
@@ -668,7 +772,8 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
         return tuple(_convert(v, float, key) for v in value)
     if hint == tuple[tuple[float, ...], ...]:
         if not isinstance(value, list) or not all(isinstance(v, list) for v in value):
-            raise SceneError(f"{key} = {value!r} must be a list of points [[x, y], ...]")
+            raise SceneError(f"{key} = {value!r} must be a list of points [[x, y], ...] "
+                             "(3D: [[x, y, z], ...])")
         return tuple(tuple(_convert(c, float, key) for c in v) for v in value)
     raise TypeError(f"no conversion for {hint}")  # a programming error, not user input
 

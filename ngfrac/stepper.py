@@ -23,7 +23,7 @@ import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
 from .adaptivity import Adaptation, MeshAdapter
-from .cracks import crack_tip, distance_to_polylines, optimal_profile
+from .cracks import crack_tip, distance_to_cracks, initial_tip, optimal_profile
 from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
 from .models import make_model
@@ -73,6 +73,12 @@ class StepRecord:
     adapt_s: float = 0.0
     forces: dict[str, float] = field(default_factory=dict)
     """Reaction force and mean displacement per loaded boundary: ``Fx_top``, ``ux_top``, ..."""
+    tip_z: float = math.nan
+    """z of the tip, a column of 3D runs only (after tip_y)."""
+    dim: int = 2
+    """Dimension of the domain (not a column)."""
+
+    NOT_FIXED = ("forces", "tip_z", "dim")
 
     @property
     def has_diagnostics(self) -> bool:
@@ -80,15 +86,22 @@ class StepRecord:
 
     @classmethod
     def columns(cls) -> list[str]:
-        """The fixed columns (without the per-boundary force columns)."""
-        return [f.name for f in fields(cls) if f.name != "forces"]
+        """The fixed columns (without tip_z and the per-boundary force columns)."""
+        return [f.name for f in fields(cls) if f.name not in cls.NOT_FIXED]
+
+    def _names(self) -> list[str]:
+        names = self.columns()
+        if self.dim == 3:
+            names.insert(names.index("tip_y") + 1, "tip_z")
+        return names
 
     def header(self) -> list[str]:
-        """All column names of this record: the fixed ones, then the force columns."""
-        return self.columns() + list(self.forces)
+        """All column names of this record: the fixed ones (and tip_z in 3D), then the
+        force columns."""
+        return self._names() + list(self.forces)
 
     def row(self) -> list[float | int]:
-        return [getattr(self, name) for name in self.columns()] + list(self.forces.values())
+        return [getattr(self, name) for name in self._names()] + list(self.forces.values())
 
 
 class PhaseFieldStepper:
@@ -121,6 +134,8 @@ class PhaseFieldStepper:
         self.inv_dt = ngs.Parameter(1.0 / scene.time.dt)
         self._started = time.perf_counter()
         self._polylines = [crack.points for crack in scene.cracks]
+        self._start_tip = (initial_tip(scene.cracks[0].points, self._on_boundary)
+                           if scene.cracks else None)
         gamma = scene.material.gamma
         # A constant toughness stays a number: no coefficient evaluation in the forms.
         self.gamma = gamma.value() if gamma.is_constant else gamma.to_coefficient()
@@ -135,6 +150,13 @@ class PhaseFieldStepper:
         self._set_initial_state()
         if self.adapter is not None and not given:
             self._adapt_initial_mesh()
+
+    def _on_boundary(self, point: np.ndarray) -> bool:
+        """Whether a point lies on the boundary of the scene's rectangle or box."""
+        g = self.scene.geometry
+        tol = 1e-10 * max(g.extent)
+        return any(abs(p - o) <= tol or abs(p - o - e) <= tol
+                   for p, o, e in zip(point, g.origin, g.extent))
 
     # -- set-up -----------------------------------------------------------------------------
     def _setup(self, mesh: ngs.Mesh) -> None:
@@ -158,7 +180,8 @@ class PhaseFieldStepper:
         # One quadrature, exact for constant gamma, in every form and energy: the u-step then
         # minimizes exactly the energy that the diagnostics report.
         self.integration_order = 2 * disc.order + 2 * disc.z_order
-        dx = ngs.dx(intrules={ngs.TRIG: ngs.IntegrationRule(ngs.TRIG, self.integration_order)})
+        element = ngs.TET if mesh.dim == 3 else ngs.TRIG
+        dx = ngs.dx(intrules={element: ngs.IntegrationRule(element, self.integration_order)})
         self.dx = dx
         u, v = self.fes_u.TnT()
         stiffness = ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v)
@@ -192,7 +215,7 @@ class PhaseFieldStepper:
     def _set_initial_state(self) -> None:
         """z0 = exp(-dist/eps) at the nodes; u0 solves the elastic problem at t = 0."""
         if self._polylines:
-            distance = distance_to_polylines(self.nodes.points, self._polylines)
+            distance = distance_to_cracks(self.nodes.points, self._polylines)
             self.nodes.assign(self.z, optimal_profile(distance, self.scene.phase_field.epsilon))
         else:
             self.z.vec[:] = 0.0
@@ -237,7 +260,8 @@ class PhaseFieldStepper:
             self._sizes = element_sizes(self.mesh)
         near = self.adapter.sizes.h_band if self.adapter else float(self._sizes.max())
         band = self.scene.phase_field.epsilon * math.log(2.0) + near
-        return crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band)
+        return crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band,
+                         start=self._start_tip)
 
     def adapt(self, tip: np.ndarray | None = None) -> Adaptation:
         """Change the mesh now and move u and z (with its non-repair bound) onto it."""
@@ -503,6 +527,7 @@ class PhaseFieldStepper:
         """A record of the current state (diagnostics only when asked for)."""
         eta_total = self.adapter.eta_total if self.adapter is not None else math.nan
         base = dict(step=self.k, t=self.t, dt=dt, wall_s=time.perf_counter() - self._started,
+                    dim=self.mesh.dim,
                     nv=self.mesh.nv, ndof=self.fes_u.ndof + self.fes_z.ndof,
                     dz_max=dz_max, z_iterations=z_iterations, eta_total=eta_total,
                     n_adapt=len(self.adaptations), step_s=step_s, solve_s=solve_s, adapt_s=adapt_s)
@@ -518,7 +543,8 @@ class PhaseFieldStepper:
         return StepRecord(**base, forces=dict(self.forces), hmin=float(self._sizes.min()),
                           hmax=float(self._sizes.max()),
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
-                          crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]))
+                          crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
+                          tip_z=float(tip[2]) if len(tip) > 2 else math.nan)
 
     def run(self, history_every: int | None = None) -> Iterator[StepRecord]:
         """Step to the end time, yielding one record per step.

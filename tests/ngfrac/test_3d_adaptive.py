@@ -1,0 +1,67 @@
+"""Adaptive 3D meshes: regenerated from a size field, never above the vertex cap."""
+import copy
+
+import numpy as np
+import pytest
+
+from ngfrac.cracks import distance_to_polygons
+from ngfrac.geometry import build_mesh, netgen_geometry
+from ngfrac.meshing import ElementGeometry
+from ngfrac.meshing3d import adapt_mesh_3d
+from ngfrac.scene import Scene
+from ngfrac.stepper import PhaseFieldStepper
+
+CRACK = [[0.0, 0.25, 0.0], [0.2, 0.25, 0.0], [0.2, 0.25, 0.1], [0.0, 0.25, 0.1]]
+
+
+def small_box(**adaptivity):
+    """A 0.5 x 0.5 x 0.1 plate with an edge crack through its depth, pulled in y."""
+    return Scene.from_dict({
+        "model": {"kind": "elasticity_3d"},
+        "material": {"E": 1.0, "nu": 0.3, "gamma": 1.0},
+        "phase_field": {"epsilon": 0.04, "alpha2": 1e-3},
+        "geometry": {"kind": "box", "width": 0.5, "height": 0.5, "depth": 0.1},
+        "cracks": [{"points": copy.deepcopy(CRACK)}],
+        "loads": [{"boundary": "top", "value": ["0", "4*t", "0"]},
+                  {"boundary": "bottom", "value": ["free", "0", "free"]}],
+        "time": {"dt": 0.05, "t_end": 0.2},
+        "discretization": {"order": 1},
+        "adaptivity": {"enabled": True, "hmin": 0.005, **adaptivity},
+    })
+
+
+def test_adapt_mesh_3d_meets_the_cap_and_refines_at_the_crack():
+    scene = small_box()
+    mesh = build_mesh(scene.geometry, 0.08, [CRACK])
+    geom = ElementGeometry.of(mesh)
+    # asks for ~100,000 vertices: h = 0.005 at the crack, growing by 0.3 per unit distance
+    sizes = np.clip(0.005 + 0.3 * distance_to_polygons(geom.centroids, [CRACK]), 0.005, 0.08)
+    new = adapt_mesh_3d(mesh, netgen_geometry(scene.geometry, [CRACK]), sizes, hmax=0.08,
+                        max_vertices=800)
+    assert 400 < new.nv <= 800, new.nv  # the cap holds and is used
+    fine = ElementGeometry.of(new)
+    distance = distance_to_polygons(fine.centroids, [CRACK])
+    near, far = fine.diameters[distance < 0.02], fine.diameters[distance > 0.15]
+    assert np.median(near) < 0.6 * np.median(far), (np.median(near), np.median(far))
+    assert set(new.GetBoundaries()) == {"left", "right", "bottom", "top", "back", "front", "crack"}
+
+
+def test_short_adaptive_3d_run_respects_cap_and_bounds():
+    scene = small_box(max_vertices=700)
+    stepper = PhaseFieldStepper(scene)
+    assert stepper.mesh.nv <= 700
+    assert stepper.adapter.sizes.hmax > 0.05  # the start mesh is coarse, not a tenth of the depth
+    previous, mesh = stepper.z_node_values(), stepper.mesh
+    for record in stepper.run():
+        assert record.nv <= 700
+        values = stepper.z_node_values()
+        assert values.min() >= 0.0 and values.max() <= 1.0
+        if stepper.mesh is mesh:
+            assert np.all(values >= previous)
+        previous, mesh = values, stepper.mesh
+    stepper.adapt()  # a forced mesh change: cap, bounds, crack kept
+    assert stepper.mesh.nv <= 700
+    values = stepper.z_node_values()
+    assert values.min() >= 0.0 and values.max() <= 1.0
+    assert stepper.adaptations and stepper.adaptations[-1].crack_length_after == pytest.approx(
+        stepper.adaptations[-1].crack_length_before, rel=0.05)
