@@ -204,7 +204,8 @@ class MeshAdapter:
         # floor of hmin * SIZE_RATIO keeps what it is asked for at or above hmin.
         sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
         if mesh.dim == 3:  # 3D constants and Netgen options: ngfrac.meshing3d
-            from .meshing3d import adapt_mesh_3d as adapt
+            from .meshing3d import adapt_mesh_3d
+            adapt = partial(adapt_mesh_3d, density=self.density)
         else:
             adapt = partial(adapt_mesh, density=self.density)
         new = adapt(mesh, self.geometry, sizes, hmax=self.sizes.hmax,

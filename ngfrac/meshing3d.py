@@ -21,7 +21,8 @@ tests/ngfrac/test_3d_meshing.py -k calibrate`` prints them again):
   smallest dihedral angle).
 
 The vertex cap is a hard limit exactly as in 2D: a mesh with too many vertices is discarded,
-the constant re-measured on it, and the mesh generated again.
+the constant re-measured on it, and the mesh generated again. As in 2D the constant measured
+on the last mesh of a run predicts the next one (:class:`ngfrac.meshing.VertexDensity`).
 """
 from __future__ import annotations
 
@@ -33,8 +34,8 @@ import numpy as np
 import ngsolve as ngs
 import netgen.meshing as ngm
 
-from .meshing import (NETGEN_GRADING, ElementGeometry, _sample, cap_vertices, element_grader,
-                      predict_vertices)
+from .meshing import (NETGEN_GRADING, ElementGeometry, VertexDensity, _sample, cap_vertices,
+                      element_grader, predict_vertices)
 from .scene import Geometry
 
 log = logging.getLogger(__name__)
@@ -117,7 +118,7 @@ def generate_3d(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float
 
 def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
                   max_vertices: int, grading: float = NETGEN_GRADING,
-                  max_attempts: int = 8) -> ngs.Mesh:
+                  density: VertexDensity | None = None, max_attempts: int = 8) -> ngs.Mesh:
     """Grade, cap, sample and remesh in 3D: the new mesh for element sizes given on ``mesh``
     (the 3D twin of :func:`ngfrac.meshing.adapt_mesh`), with at most ``max_vertices`` vertices.
 
@@ -142,18 +143,23 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
         Hard upper bound of the vertex count.
     grading : float
         Netgen's grading.
+    density : VertexDensity, optional
+        The constant c learned from the previous meshes of the run (pass one instance to every
+        call, as in 2D); until it has measured a 3D mesh, :data:`VERTEX_DENSITY_3D` is used.
     max_attempts : int
         Generations before giving up with a ``RuntimeError``.
     """
+    density = density if density is not None else VertexDensity()
     geom = ElementGeometry.of(mesh)
     if geom.dim != 3:
         raise ValueError(f"adapt_mesh_3d needs a 3D mesh, got dimension {geom.dim}")
     grade = element_grader(geom, grading)
     requested = np.minimum(np.asarray(sizes, dtype=float), hmax)
-    density, margin, nv = VERTEX_DENSITY_3D, 0.95, 0
+    c = density.value if density.measured else VERTEX_DENSITY_3D
+    margin, nv = 0.95, 0
     for attempt in range(1, max_attempts + 1):
         capped = cap_vertices(requested, geom.measures, margin * max_vertices, hmax=hmax,
-                              density=density, dim=3, grade=grade)
+                              density=c, dim=3, grade=grade)
         field = _sample(geom, capped)
         started = time.perf_counter()
         ngmesh = generate_3d(ngeo, field.points, field.sizes,
@@ -161,10 +167,11 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
         nv = len(ngmesh.Points())
         integral = predict_vertices(capped, geom.measures, density=1.0, dim=3)
         log.info("remesh 3D attempt %d: %d vertices (cap %d, predicted %.0f) in %.2f s", attempt,
-                 nv, max_vertices, density * integral, time.perf_counter() - started)
+                 nv, max_vertices, c * integral, time.perf_counter() - started)
+        density.update(nv, integral)
         if nv <= max_vertices:
             return ngs.Mesh(ngmesh)
-        density = nv / integral
+        c = density.value
         margin *= 0.95
     raise RuntimeError(f"remesh: no 3D mesh with <= {max_vertices} vertices after {max_attempts} "
                        f"attempts (last had {nv}); raise max_vertices or hmax")

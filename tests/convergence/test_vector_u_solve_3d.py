@@ -8,8 +8,9 @@ Manufactured solution on the unit cube (E = 50, nu = 0.29)::
 
 with f = -div(s sigma[u]), s = (1-z_phase)^2 + eta, computed by NGSolve's symbolic ``Diff``
 and compared once with a hand-derived component; u = exact on all six faces (not zero, so the
-per-component Dirichlet interpolation is exercised). Observed L2 and H1 rates are about p + 1
-and p (printed with the table).
+per-component Dirichlet interpolation is exercised). Measured rates against Netgen's maxh
+(``pytest -s --runslow``): L2 2.17 / 2.93 / 4.47 and H1 1.07 / 1.95 / 3.31 for orders 1 / 2 / 3
+(p + 1 and p; order 3 a little above on these coarse meshes).
 """
 import numpy as np
 import ngsolve as ngs
@@ -102,8 +103,9 @@ def errors(order, h):
 SIZES = {1: [0.3, 0.2, 0.12, 0.08], 2: [0.4, 0.25, 0.15, 0.1], 3: [0.3, 0.2, 0.15, 0.12]}
 
 
-@pytest.mark.parametrize("order", [1, 2, 3])
+@pytest.mark.parametrize("order", [1, 2, pytest.param(3, marks=pytest.mark.slow)])
 def test_vector_u_solve_rates_3d(order):
+    """Order 3 takes ~100 s (P3 on 855 vertices with the order-10 rule), so it is a slow study."""
     sizes = SIZES[order]
     table = np.array([errors(order, h) for h in sizes])
     rate_l2 = np.polyfit(np.log(sizes), np.log(table[:, 0]), 1)[0]
