@@ -484,8 +484,8 @@ class Discretization(_Section):
         _require(1 <= self.order <= 6, s, "order", self.order, "must be an integer in 1..6")
         _require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
                  "must be 1 or 2 (0 = min(order, 2))")
-        _require(self.u_solver in ("sparsecholesky", "umfpack"), s, "u_solver", self.u_solver,
-                 "choose 'sparsecholesky' or 'umfpack'")
+        _require(self.u_solver in ("sparsecholesky", "umfpack", "cg"), s, "u_solver",
+                 self.u_solver, "choose 'sparsecholesky', 'umfpack' or 'cg' (with BDDC)")
         _require(self.z_solver in ("cg", "sparsecholesky", "umfpack"), s, "z_solver",
                  self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
         _require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,

@@ -22,11 +22,11 @@ The spectral split is implemented for the plane models (closed-form 2x2 eigenval
 Both energies are convex, piecewise quadratic and positively homogeneous of degree 2 in e,
 so the u-problem is nonlinear but well posed. It is solved by Newton's method with the exact
 tangent written out (:meth:`EnergySplit.tangent`: the second derivative of psi+ at the current
-u, a linear form in the trial function, so each Newton matrix assembles as fast as the linear
-u-problem; NGSolve's symbolic ``Variation`` gives the same matrix by automatic differentiation
-but was 6x (Amor) and 27x (Miehe) slower to assemble), a backtracking line search on the
-energy, and the Newton decrement as the stopping test. Homogeneity gives ``D E(u) = H(u) u``
-exactly (H the tangent at u), so the residual is ``H(u) u - rhs`` and the tangent at the
+u, a linear form in the trial function; NGSolve's symbolic ``Variation`` gives the same matrix
+by automatic differentiation but was 6x (Amor) and 27x (Miehe) slower to assemble), a
+backtracking line search on the energy, and the residual on the free dofs relative to |H u|
+(1e-10) as the stopping test. Homogeneity gives ``D E(u) = H(u) u`` exactly (H the tangent at
+u), so the residual is ``H(u) u - rhs`` and the tangent at the
 converged u also gives the reaction forces (:mod:`ngfrac.reactions`).
 
 Miehe's tangent in 2D, with principal strains e1 >= e2, eigenvectors n1, n2, P1 = n1 n1^T:
@@ -36,11 +36,13 @@ Miehe's tangent in 2D, with principal strains e1 >= e2, eigenvectors n1, n2, P1 
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import ngsolve as ngs
+import numpy as np
+
+from .linsolve import iterations as solver_iterations, u_inverse, update
 
 log = logging.getLogger(__name__)
 
@@ -165,10 +167,11 @@ def make_split(model: Any, kind: str) -> EnergySplit | None:
 
 @dataclass
 class NewtonResult:
-    """Iterations and the Newton decrements sqrt(<r, H^-1 r>) of one solve (before each step)."""
+    """Iterations and the relative residuals of one solve: |r|/|H u| on the free dofs at each
+    iterate (H u holds the reactions on the Dirichlet dofs, the natural scale)."""
 
     iterations: int
-    decrements: list[float] = field(default_factory=list)
+    residuals: list[float] = field(default_factory=list)
 
 
 class NewtonSolver:
@@ -190,27 +193,30 @@ class NewtonSolver:
     freedofs : ngsolve.BitArray
         Dofs to solve for.
     inverse : str
-        Sparse direct solver for the Newton systems (H is symmetric positive definite: the
-        energy is convex and the residual stiffness keeps it strictly so).
+        Solver for the Newton systems, a ``discretization.u_solver`` (H is symmetric positive
+        definite: the energy is convex and the residual stiffness keeps it strictly so).
     rtol : float
-        Stop when the Newton decrement is at most ``rtol`` sqrt(<H u, u>).
+        Stop when the residual on the free dofs is at most ``rtol`` |H u| (checked before a
+        Newton system is solved, so a converged iterate costs one assembly).
     max_iterations : int
         More Newton steps than this raise RuntimeError.
+    preconditioner : ngsolve.Preconditioner, optional
+        Registered with ``a`` before its first assembly; needed for ``inverse = "cg"``.
     """
 
     def __init__(self, a: ngs.BilinearForm, u: ngs.GridFunction, energy: Any, order: int,
-                 freedofs: ngs.BitArray, inverse: str = "sparsecholesky", rtol: float = 1e-9,
-                 max_iterations: int = 30) -> None:
+                 freedofs: ngs.BitArray, inverse: str = "sparsecholesky", rtol: float = 1e-10,
+                 max_iterations: int = 30, preconditioner: Any = None) -> None:
         self.a, self.u, self.energy, self.order = a, u, energy, order
-        self.freedofs, self.inverse = freedofs, inverse
+        self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
         self.rtol, self.max_iterations = rtol, max_iterations
         self._inv = None
 
     def _factorize(self) -> Any:
         if self._inv is None:
-            self._inv = self.a.mat.Inverse(self.freedofs, inverse=self.inverse)
+            self._inv = u_inverse(self.a, self.freedofs, self.inverse, self.preconditioner)
         else:
-            self._inv.Update()
+            update(self._inv)
         return self._inv
 
     def total_energy(self, rhs: ngs.BaseVector | None) -> float:
@@ -224,21 +230,25 @@ class NewtonSolver:
         converge."""
         a, vec = self.a, self.u.vec
         residual, step, start = vec.CreateVector(), vec.CreateVector(), vec.CreateVector()
+        free = np.array(self.freedofs, dtype=bool)
         result = NewtonResult(0)
         for iteration in range(self.max_iterations + 1):
             a.Assemble()
             residual.data = a.mat * vec
+            scale = float(np.linalg.norm(residual.FV().NumPy()))
             if rhs is not None:
                 residual.data -= rhs
-            step.data = self._factorize() * residual
-            decrement2 = max(ngs.InnerProduct(step, residual), 0.0)
-            scale = abs(ngs.InnerProduct(a.mat * vec, vec))
-            result.decrements.append(math.sqrt(decrement2))
-            if math.sqrt(decrement2) <= self.rtol * math.sqrt(scale):
+            relative = float(np.linalg.norm(residual.FV().NumPy()[free])) / scale if scale else 0.0
+            result.residuals.append(relative)
+            if relative <= self.rtol:
                 result.iterations = iteration
                 return result
             if iteration == self.max_iterations:
                 break
+            inverse = self._factorize()
+            step.data = inverse * residual
+            solver_iterations(inverse)  # raises if CG did not converge
+            decrement2 = max(ngs.InnerProduct(step, residual), 0.0)
             # backtracking on the energy: a full step unless it raises E (Armijo, 1e-4); the
             # slack lets through decreases below the round-off of E itself
             start.data = vec
@@ -249,5 +259,5 @@ class NewtonSolver:
                 if self.total_energy(rhs) <= energy - 1e-4 * s * decrement2 + slack:
                     break
                 s *= 0.5
-        raise RuntimeError(f"Newton did not converge in {self.max_iterations} steps "
-                           f"(decrements {', '.join(f'{d:.2e}' for d in result.decrements[-4:])})")
+        raise RuntimeError(f"Newton did not converge in {self.max_iterations} steps (relative "
+                           f"residuals {', '.join(f'{d:.2e}' for d in result.residuals[-4:])})")

@@ -31,6 +31,7 @@ from .nodal import LagrangeNodes
 from .profiling import PhaseTimer
 from .reactions import reaction_columns
 from .scene import Scene
+from .linsolve import iterations as solver_iterations, register_preconditioner, u_inverse, update
 from .splits import NewtonSolver, make_split
 from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
@@ -192,6 +193,7 @@ class PhaseFieldStepper:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
         self.a_u += stiffness * dx
+        self._pre_u = register_preconditioner(self.a_u, disc.u_solver)  # before any assembly
         self.m_u = None
         if pf.alpha1 > 0:
             self.m_u = ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
@@ -199,7 +201,7 @@ class PhaseFieldStepper:
         self.body_force = self.model.body_force(sc.material, self.time)
         self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
         if self.split is not None:
-            self._newton = self._newton_solver(self.a_u, pf.alpha1)
+            self._newton = self._newton_solver(self.a_u, pf.alpha1, self._pre_u)
 
         drive = self.u_prev if disc.coupling == "paper" else self.u
         self._drive = (self.model.energy_density(drive) if self.split is None
@@ -232,8 +234,10 @@ class PhaseFieldStepper:
         static = ngs.BilinearForm(self.fes_u, symmetric=True)
         static += ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v) * self.dx
         with ngs.TaskManager():
+            solver = self.scene.discretization.u_solver
+            pre = register_preconditioner(static, solver)
             static.Assemble()
-            inverse = static.mat.Inverse(self.fes_u.FreeDofs(), inverse=self.scene.discretization.u_solver)
+            inverse = u_inverse(static, self.fes_u.FreeDofs(), solver, pre)
             residual = (-static.mat * self.u.vec).Evaluate()
             if self.f_u is not None:
                 self.f_u.Assemble()
@@ -337,10 +341,10 @@ class PhaseFieldStepper:
                 self.f_u.Assemble()
         with self.timer.phase("u: factorize"):
             if self._inv_u is None:
-                self._inv_u = self.a_u.mat.Inverse(self.fes_u.FreeDofs(),
-                                                   inverse=self.scene.discretization.u_solver)
+                self._inv_u = u_inverse(self.a_u, self.fes_u.FreeDofs(),
+                                        self.scene.discretization.u_solver, self._pre_u)
             else:
-                self._inv_u.Update()
+                update(self._inv_u)
         with self.timer.phase("u: solve"):
             self._apply_boundary_values()
             residual = self.u.vec.CreateVector()
@@ -352,6 +356,11 @@ class PhaseFieldStepper:
             if self.f_u is not None:
                 residual.data += self.f_u.vec
             self.u.vec.data += self._inv_u * residual
+            try:
+                self.u_iterations = solver_iterations(self._inv_u)
+            except RuntimeError as err:
+                raise SolverError(f"the u-solve failed at step {self.k + 1} (t={self.time.Get():g}): "
+                                  f"{err}; set discretization.u_solver = 'sparsecholesky'") from None
         if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
             raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "
                               f"(t={self.time.Get():g}); "
@@ -369,7 +378,8 @@ class PhaseFieldStepper:
             static = ngs.BilinearForm(self.fes_u, symmetric=True)
             static += self.split.tangent(self.u, u, v, self.z,
                                          self.scene.phase_field.residual_stiffness) * self.dx
-            newton = self._newton_solver(static, 0.0)
+            newton = self._newton_solver(
+                static, 0.0, register_preconditioner(static, self.scene.discretization.u_solver))
         elif self.m_u is not None:
             rhs.data = self.inv_dt.Get() * (self.m_u.mat * self.u_prev.vec)
         if self.f_u is not None:
@@ -388,14 +398,17 @@ class PhaseFieldStepper:
             raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "
                               f"(t={self.time.Get():g}); lower time.dt")
 
-    def _newton_solver(self, tangent: ngs.BilinearForm, alpha1: float) -> NewtonSolver:
+    def _newton_solver(self, tangent: ngs.BilinearForm, alpha1: float,
+                       preconditioner: object = None) -> NewtonSolver:
         """Newton for the split u-problem with this tangent; alpha1 > 0 adds the energy of
-        the alpha1 term (its linear part is the solve's right-hand side)."""
+        the alpha1 term (its linear part is the solve's right-hand side); the preconditioner
+        (registered with the tangent) is for u_solver = 'cg'."""
         energy = self.split.elastic_density(self.u, self.z, self.scene.phase_field.residual_stiffness)
         if alpha1 > 0:
             energy = energy + 0.5 * alpha1 * self.inv_dt * ngs.InnerProduct(self.u, self.u)
         return NewtonSolver(tangent, self.u, energy, self.integration_order,
-                            self.fes_u.FreeDofs(), self.scene.discretization.u_solver)
+                            self.fes_u.FreeDofs(), self.scene.discretization.u_solver,
+                            preconditioner=preconditioner)
 
     def _elastic_density(self) -> ngs.CoefficientFunction:
         """W with E_el = 1/2 int ((1-z)^2 + eta) W: sigma:e, or with a split
