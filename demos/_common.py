@@ -1,13 +1,16 @@
-"""What the mode III demo scripts share: run a scene through the API and say what the crack did."""
+"""What the demo scripts share: run a scene through the API, keep its stepper, measure the
+crack path, plot a force-displacement curve, and say what the crack did."""
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, load_scene, run_scene
+from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
+from ngfrac.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
 from ngfrac.plotting import read_history
 
 
@@ -30,3 +33,57 @@ def command_line(main: Callable[..., RunSummary], default_out: str) -> None:
     args = sys.argv[1:]
     out = args.pop(0) if args and not args[0].startswith("--") else default_out
     main(out, [value for flag, value in zip(args[::2], args[1::2]) if flag == "--set"])
+
+
+def run_keeping_stepper(scene: Scene, out_dir: str | Path,
+                        on_step: Callable[[PhaseFieldStepper], None] | None = None,
+                        ) -> tuple[RunSummary, PhaseFieldStepper]:
+    """Run ``scene`` into ``out_dir`` and return the summary and the stepper of the last step
+    (whose mesh and z the path measurements read)."""
+    last: list[PhaseFieldStepper] = []
+
+    def keep(stepper: PhaseFieldStepper) -> None:
+        last[:] = [stepper]
+        if on_step is not None:
+            on_step(stepper)
+
+    summary = run_scene(scene, out_dir, overwrite=True, on_step=keep)
+    return summary, last[0]
+
+
+def measure_kink_both_ways(stepper: PhaseFieldStepper, scene: Scene, history: dict,
+                           rmin: float, rmax: float) -> tuple[float, CrackPath, float]:
+    """The kink angle from the ridge of z between ``rmin`` and ``rmax`` from the initial tip,
+    that ridge as a path, and the angle from the tip history (nan if too short)."""
+    measured, path = measure_kink(stepper, rmin, rmax)
+    origin, reference = initial_tip(scene.cracks[0].points)
+    track = history_path(history, origin, reference, max_jump=0.1)
+    try:
+        from_history = kink_angle(track, rmin, rmax)
+    except ValueError:
+        from_history = math.nan
+    return measured, path, from_history
+
+
+def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: str,
+                            label: tuple[str, str], estimate: tuple[float, float] | None = None,
+                            curve: str = "phase field") -> Path:
+    """The force-displacement curve with its peak marked (and an LEFM estimate, when given)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    peak = int(np.argmax(force))
+    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    ax.plot(u, force, "-", lw=1.5, label=curve)
+    ax.plot(u[peak], force[peak], "o", color="C3",
+            label=f"peak {force[peak]:.3f} kN at {u[peak]:.3g} mm")
+    if estimate is not None:
+        ax.plot(*estimate, "x", color="k", ms=9, label="LEFM (sharp crack) start of growth")
+    ax.set(xlabel=f"{label[1]} (mm)", ylabel=f"{label[0]} (kN per mm thickness)", title=title)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+    return png

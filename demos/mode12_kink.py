@@ -43,12 +43,11 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
-from ngfrac.crackpath import history_path, initial_tip, kink_angle, measure_kink, \
-    sharp_crack_solution
+from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
+from ngfrac.crackpath import sharp_crack_solution
 from ngfrac.plotting import read_history
 
-from _common import command_line  # demos/_common.py
+from _common import command_line, measure_kink_both_ways, run_keeping_stepper  # demos/_common.py
 
 SCENE = Path(__file__).with_suffix(".toml")
 
@@ -81,24 +80,11 @@ def main(out_dir: str | Path = "out/mode12_kink", overrides: Sequence[str] = (),
           f"direction {prediction['principal_deg']:.1f} deg; the paper's 'perpendicular to g' "
           f"{prediction['paper_deg']:.1f} deg")
 
-    last: list[PhaseFieldStepper] = []
-
-    def keep(stepper: PhaseFieldStepper) -> None:
-        last[:] = [stepper]
-        if on_step is not None:
-            on_step(stepper)
-
-    summary = run_scene(scene, out_dir, overwrite=True, on_step=keep)
+    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
     eps = scene.phase_field.epsilon
     rmin, rmax = eps, 4 * eps
-    measured, path = measure_kink(last[0], rmin, rmax)
-    origin, reference = initial_tip(scene.cracks[0].points)
-    track = history_path(read_history(Path(out_dir) / "history.csv"), origin, reference,
-                         max_jump=0.1)
-    try:
-        from_history = kink_angle(track, rmin, rmax)
-    except ValueError:
-        from_history = math.nan
+    measured, path, from_history = measure_kink_both_ways(
+        stepper, scene, read_history(Path(out_dir) / "history.csv"), rmin, rmax)
     print(f"measured kink angle {measured:.1f} deg (ridge of z, {rmin:g} to {rmax:g} from the "
           f"tip; from the tip history {from_history:.1f} deg); path:\n{path.text(every=2)}")
     result = {**prediction, "measured_deg": measured, "measured_history_deg": from_history,

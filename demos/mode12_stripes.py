@@ -29,12 +29,11 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
-from ngfrac.crackpath import history_path, initial_tip, kink_angle, measure_kink, \
-    sharp_crack_solution
+from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
+from ngfrac.crackpath import sharp_crack_solution
 from ngfrac.plotting import read_history
 
-from _common import command_line  # demos/_common.py
+from _common import command_line, measure_kink_both_ways, run_keeping_stepper  # demos/_common.py
 
 SCENE = Path(__file__).with_suffix(".toml")
 MEAN_GAMMA = 0.5
@@ -67,24 +66,11 @@ def main(out_dir: str | Path = "out/mode12_stripes", overrides: Sequence[str] = 
           f"{prediction['t_c_mean']:.3f}); kink {prediction['mts_deg']:.1f} deg in homogeneous "
           "material, steeper here (the weak stripe runs at -45 deg)")
 
-    last: list[PhaseFieldStepper] = []
-
-    def keep(stepper: PhaseFieldStepper) -> None:
-        last[:] = [stepper]
-        if on_step is not None:
-            on_step(stepper)
-
-    summary = run_scene(scene, out_dir, overwrite=True, on_step=keep)
+    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
     history = read_history(Path(out_dir) / "history.csv")
     eps = scene.phase_field.epsilon
     rmin, rmax = eps, 4 * eps
-    measured, path = measure_kink(last[0], rmin, rmax)
-    origin, reference = initial_tip(scene.cracks[0].points)
-    track = history_path(history, origin, reference, max_jump=0.1)
-    try:
-        from_history = kink_angle(track, rmin, rmax)
-    except ValueError:
-        from_history = math.nan
+    measured, path, from_history = measure_kink_both_ways(stepper, scene, history, rmin, rmax)
     onset = onset_time(history, scene)
     print(f"measured: growth starts at t = {onset:.3f}; direction {measured:.1f} deg (ridge of z, "
           f"{rmin:g} to {rmax:g} from the tip; from the tip history {from_history:.1f} deg); "

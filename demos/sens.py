@@ -28,34 +28,13 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, load_scene, run_scene
+from ngfrac import PhaseFieldStepper, RunSummary, load_scene
 from ngfrac.crackpath import griffith_onset, history_path, initial_tip, measure_kink
 from ngfrac.plotting import read_history
 
-from _common import command_line  # demos/_common.py
+from _common import command_line, plot_force_displacement, run_keeping_stepper  # demos/_common.py
 
 SCENE = Path(__file__).with_suffix(".toml")
-
-
-def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: str,
-                            label: tuple[str, str]) -> Path:
-    """The force-displacement curve with its peak marked."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    peak = int(np.argmax(force))
-    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
-    ax.plot(u, force, "-", lw=1.5, label="phase field (no split)")
-    ax.plot(u[peak], force[peak], "o", color="C3",
-            label=f"peak {force[peak]:.3f} kN at {u[peak]:.3g} mm")
-    ax.set(xlabel=f"{label[1]} (mm)", ylabel=f"{label[0]} (kN per mm thickness)", title=title)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.savefig(png, dpi=120)
-    plt.close(fig)
-    return png
 
 
 def main(out_dir: str | Path = "out/sens", overrides: Sequence[str] = (),
@@ -65,24 +44,18 @@ def main(out_dir: str | Path = "out/sens", overrides: Sequence[str] = (),
     print(f"{scene.name}: LEFM K_I/K_II = {estimate['K_I'] / estimate['K_II']:.3f}, kink "
           f"{estimate['kink_deg']:.1f} deg; the sharp notch starts to grow at u = "
           f"{estimate['t_c']:.3g} mm, F = {estimate['F_c']:.3f} kN")
-    last: list[PhaseFieldStepper] = []
-
-    def keep(stepper: PhaseFieldStepper) -> None:
-        last[:] = [stepper]
-        if on_step is not None:
-            on_step(stepper)
-
-    summary = run_scene(scene, out_dir, overwrite=True, on_step=keep)
+    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
     out = Path(out_dir)
     history = read_history(out / "history.csv")
     u, force = history["ux_top"], history["Fx_top"]
     peak = int(np.argmax(force))
     eps = scene.phase_field.epsilon
     plot_force_displacement(u, force, out / "force_displacement.png",
-                            f"{scene.name}: epsilon = {eps:g} mm", ("F_x top", "u_x top"))
+                            f"{scene.name}: epsilon = {eps:g} mm", ("F_x top", "u_x top"),
+                            curve="phase field (no split)")
     origin, reference = initial_tip(scene.cracks[0].points)
     try:
-        angle, path = measure_kink(last[0], eps, 6 * eps)
+        angle, path = measure_kink(stepper, eps, 6 * eps)
     except ValueError:  # the crack has not grown 6 epsilon
         angle, path = float("nan"), None
     track = history_path(history, origin, reference, max_jump=0.1)

@@ -39,32 +39,9 @@ from ngfrac import PhaseFieldStepper, RunSummary, load_scene, run_scene
 from ngfrac.crackpath import griffith_onset
 from ngfrac.plotting import read_history
 
-from _common import command_line  # demos/_common.py
+from _common import command_line, plot_force_displacement  # demos/_common.py
 
 SCENE = Path(__file__).with_suffix(".toml")
-
-
-def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: str,
-                            label: str, estimate: tuple[float, float] | None = None) -> Path:
-    """The force-displacement curve with its peak marked (and an estimate, when given)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    peak = int(np.argmax(force))
-    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
-    ax.plot(u, force, "-", lw=1.5, label="phase field")
-    ax.plot(u[peak], force[peak], "o", color="C3",
-            label=f"peak {force[peak]:.3f} kN at {u[peak]:.3g} mm")
-    if estimate is not None:
-        ax.plot(*estimate, "x", color="k", ms=9, label="LEFM (sharp crack) start of growth")
-    ax.set(xlabel=f"{label[1]} (mm)", ylabel=f"{label[0]} (kN per mm thickness)", title=title)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.savefig(png, dpi=120)
-    plt.close(fig)
-    return png
 
 
 def main(out_dir: str | Path = "out/sent", overrides: Sequence[str] = (),
