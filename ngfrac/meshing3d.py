@@ -20,6 +20,11 @@ tests/ngfrac/test_3d_meshing.py -k calibrate`` prints them again):
 * ``optsteps3d = 1`` (the default 3 costs about twice the time for a slightly better
   smallest dihedral angle).
 
+Marked bisection (``SetRefinementFlag`` + ``Mesh.Refine``) also works on these meshes in
+6.2.2608 and keeps the crack faces, but it cannot coarsen and made 4.6-6.2x the vertices of a
+regenerated mesh for the same field (3,988 / 12,085 / 39,508 against 872 / 2,477 / 6,383 for
+hmin = 0.04 / 0.02 / 0.01 around the demo's crack; docs/theory.md, "3D").
+
 The vertex cap is a hard limit exactly as in 2D: a mesh with too many vertices is discarded,
 the constant re-measured on it, and the mesh generated again. As in 2D the constant measured
 on the last mesh of a run predicts the next one (:class:`ngfrac.meshing.VertexDensity`).
