@@ -131,8 +131,8 @@ class EnergySplit:
             cross = 0.5 * dev_hk - 0.25 * ngs.InnerProduct(d1, h) * ngs.InnerProduct(d1, k)
             one_positive = (2 * ngs.InnerProduct(p1, h) * ngs.InnerProduct(p1, k)
                             + 4 * e1 / gap * cross)
-            # the branches select coefficients, never trial or test functions: NGSolve then
-            # sees a form linear in them (IfPos around them made assembly 50x slower)
+            # the branches select coefficients, never trial or test functions (IfPos around
+            # them: 13.3 s against 6.6 s per assembly at 6,000 dofs, before Compile below)
             both = ngs.IfPos(e2, 1.0, 0.0)
             mixed = ngs.IfPos(e2, 0.0, ngs.IfPos(e1, 1.0, 0.0))
             squares = both * 2 * ngs.InnerProduct(h, k) + mixed * one_positive
