@@ -65,3 +65,29 @@ def test_short_adaptive_3d_run_respects_cap_and_bounds():
     assert values.min() >= 0.0 and values.max() <= 1.0
     assert stepper.adaptations and stepper.adaptations[-1].crack_length_after == pytest.approx(
         stepper.adaptations[-1].crack_length_before, rel=0.05)
+
+
+def test_3d_adaptive_restart_continues_exactly(tmp_path):
+    """Checkpoints hold 3D meshes: a run stopped after two steps and restarted ends with the
+    same history row as the uninterrupted run (mesh changes included)."""
+    from ngfrac.plotting import read_history
+    from ngfrac.runner import run_scene
+
+    def scene(t_end):
+        data = small_box(max_vertices=700)
+        return Scene.from_dict({**_as_dict(data), "time": {"dt": 0.05, "t_end": t_end},
+                                "output": {"checkpoint_every": 1, "vtk_every": 0}})
+
+    run_scene(scene(0.2), tmp_path / "full", plots=False)
+    run_scene(scene(0.1), tmp_path / "part", plots=False)
+    run_scene(scene(0.2), tmp_path / "part", restart=True, plots=False)
+    full, part = read_history(tmp_path / "full" / "history.csv"), read_history(tmp_path / "part" / "history.csv")
+    assert list(full) == list(part) and "tip_z" in full
+    for column in ("step", "nv", "E_total", "crack_length", "tip_z", "Fy_top", "n_adapt"):
+        assert part[column][-1] == full[column][-1], column
+
+
+def _as_dict(scene):
+    data = scene.to_dict()
+    data.pop("name")
+    return data
