@@ -26,6 +26,34 @@ from ngfrac.stepper import PhaseFieldStepper  # noqa: E402
 
 import stress_cases as sc  # noqa: E402
 
+THREE_D = "three_d"
+"""The 3D case of tests/stress/test_stress_3d.py (a unit cube pulled apart, P1)."""
+
+
+def run_three_d() -> tuple[sc.CaseResult, list[str]]:
+    """The 3D case as its test runs it: the box's load sampler in place of the rectangle's,
+    the monitor's checks and the test's physical ones (the cube damaged, a finite force)."""
+    import math
+
+    import test_stress_3d as t3
+    from ngfrac.scene import Scene
+
+    original = sc._load_sampler
+    sc._load_sampler = t3.box_load_sampler
+    try:
+        case = sc.StressCase(THREE_D, "unit cube pulled apart in y (E 50, nu 0.29, h 0.2), P1, ramp "
+                             "and hold", lambda: Scene.from_dict(t3.box_scene_data()), min_held=20)
+        result = sc.run_case(case)
+    finally:
+        sc._load_sampler = original
+    found = sc.problems(result)
+    last = result.records[-1]
+    if not last.crack_length > 0.01:
+        found.append(f"no damage: crack length {last.crack_length:.3g}")
+    if not (0 < last.forces["Fy_top"] < 2 * 50.0 * 0.1 and math.isfinite(last.E_total)):
+        found.append(f"force on the top {last.forces['Fy_top']:.3g} outside (0, 10)")
+    return result, found
+
 
 def _patch(name, function):
     original = getattr(PhaseFieldStepper, name)
@@ -54,12 +82,13 @@ def main(argv: list[str]) -> int:
         threads = int(argv[i + 1])
         del argv[i:i + 2]
     ngs.SetNumThreads(threads)
-    unknown = [name for name in argv if name not in sc.CASE_BY_NAME and name not in ("failure_u", "failure_z")]
+    extra = ("failure_u", "failure_z", THREE_D)
+    unknown = [name for name in argv if name not in sc.CASE_BY_NAME and name not in extra]
     if unknown:
         print(f"unknown case(s) {', '.join(unknown)}; cases: {', '.join(sc.CASE_BY_NAME)}, "
-              "failure_u, failure_z", file=sys.stderr)
+              f"{', '.join(extra)}", file=sys.stderr)
         return 2
-    names = argv or [*sc.CASE_BY_NAME, "failure_u", "failure_z"]
+    names = argv or [*sc.CASE_BY_NAME, *extra]
     print("| case | what | steps | wall s | eps/hmin | z outside [0,1] | z decrease "
           "| energy rise (held steps) | max nv | result |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -77,19 +106,22 @@ def main(argv: list[str]) -> int:
             print(f"| {name} | {what} | {sc.FAIL_AT} | {result.wall_s:.1f} | | | | | | "
                   f"{_verdict(found, [], wrong_step)} |", flush=True)
         else:
-            case = sc.CASE_BY_NAME[name]
-            result = sc.run_case(case)
-            found = sc.problems(result)
-            energy = sc.energy_problems(result) if case.energy_known else []
+            if name == THREE_D:
+                result, found = run_three_d()
+                description, slow, energy = result.case.description, False, []
+            else:
+                case = sc.CASE_BY_NAME[name]
+                result = sc.run_case(case)
+                found = sc.problems(result)
+                energy = sc.energy_problems(result) if case.energy_known else []
+                description, slow = case.description, case.slow
             m = result.monitor
             ratio = result.scene.phase_field.epsilon / np.nanmin(result.series("hmin"))
-            print(f"| {name}{' (slow)' if case.slow else ''} | {case.description} | {result.steps} "
+            print(f"| {name}{' (slow)' if slow else ''} | {description} | {result.steps} "
                   f"| {result.wall_s:.1f} | {ratio:.2f} | {m.z_outside:.1e} | {m.z_decrease:.1e} "
                   f"| {_number(m.energy_rise)} ({m.held_steps}) | {m.max_nv} "
                   f"| {_verdict(found, energy)} |", flush=True)
         failed += bool(found)
-    print("| three_d | 3D plate | | | | | | | | skipped: the library is 2D only "
-          "(geometry.kind = rectangle) |")
     return 1 if failed else 0
 
 
