@@ -18,10 +18,11 @@ with a rounded end, and AT2 (no elastic limit) damages the whole ligament before
 So its peak comes later than u_c and at a force near F_c: the published no-split curves for
 epsilon = 0.015 mm peak at about 0.7-0.75 kN near u = 5.5-6e-3 mm.
 
-Measured (epsilon = 0.015 mm, P2, adaptive up to 8,000 vertices, 700 steps, 13 min on one
-core): the force peaks at 0.641 kN at u = 5.25e-3 mm (the largest row, 0.648 kN, is a one-step
-spike right after a mesh change), 3% below F_c and 9-15% below the published curves, at 12%
-more displacement than u_c. At u = 1.7e-3 mm the force dips by 1% while the damage at the
+Measured (``NGFRAC_THREADS=1 python demos/sent.py``: epsilon = 0.015 mm, P2, adaptive up to
+8,000 vertices, 700 steps, 39 min on a 2-core machine shared at a load of about 8): the force
+peaks at 0.641 kN at u = 5.06e-3 mm and stays within 0.2% of that up to 5.4e-3 mm, 1% below
+F_c and 9-15% below the published curves, at 11% more displacement than u_c. Near
+u = 1.7e-3 mm the force dips by about 2% while the damage at the
 notch tip localizes. After the peak the crack runs straight along y = 0.5, but the force falls
 gradually (0.35 kN at u = 7e-3 mm with the tip at x = 0.83): z is driven by the previous
 step's displacement, so the crack advances a limited distance per step and the unstable
