@@ -16,6 +16,7 @@ QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_ever
 QUICK_EXTRA = {
     # Modes I+II on E = 50 and SENT/SENS in mm: epsilon = 0.04 lets the whole specimen damage
     # (AT2 has no elastic limit) before the crack grows, and their loads need their own steps.
+    # P1 u (order=1) where the quick P2 run took over a minute (SENS: 106 s against 54 s).
     "mode12_kink": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=4e-3"],
     "mode12_stripes": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=4e-3"],
     "sent": ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3"],
