@@ -529,8 +529,8 @@ class Adaptivity(_Section):
 
     Sizes are 0 for "derived from epsilon": ``h_crack`` (where z >= 0.9, the crack core)
     defaults to max(hmin, epsilon/10), ``h_band`` (where z >= 0.1) to epsilon/4, ``h_tip``
-    (within ``tip_margin`` of the tip) to h_crack, ``hmax`` to a tenth of the shorter side,
-    ``tip_margin`` to 3 epsilon.
+    (within ``tip_margin`` of the tip) to h_band, ``hmax`` to a tenth of the shorter side,
+    ``tip_margin`` to 4 epsilon.
     """
 
     SECTION: ClassVar[str] = "adaptivity"
