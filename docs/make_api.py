@@ -14,6 +14,18 @@ MODULES = ["ngfrac", "ngfrac.scene", "ngfrac.stepper", "ngfrac.runner", "ngfrac.
            "ngfrac.plotting", "ngfrac.output", "ngfrac.expressions", "ngfrac.cracks",
            "ngfrac.geometry", "ngfrac.nodal", "ngfrac.diagnostics", "ngfrac.profiling",
            "estimators"]
+"""The order of the reference; modules of ngfrac not named here follow, alphabetically."""
+NOT_API = {"ngfrac.__main__", "ngfrac.cli"}
+
+
+def all_modules() -> list[str]:
+    """MODULES, then every other ngfrac module (so a new module is never left out)."""
+    import pkgutil
+
+    import ngfrac
+
+    found = {f"ngfrac.{m.name}" for m in pkgutil.iter_modules(ngfrac.__path__)}
+    return MODULES + sorted(found - set(MODULES) - NOT_API)
 
 
 def public_members(module):
@@ -35,7 +47,7 @@ def signature(obj) -> str:
 def main() -> None:
     lines = ["# API reference", "",
              "Generated from the docstrings by `python docs/make_api.py`; do not edit by hand.", ""]
-    for name in MODULES:
+    for name in all_modules():
         try:
             module = importlib.import_module(name)
         except ImportError:

@@ -1,5 +1,4 @@
 """Every VTK and HDF5 file a run writes is read back by independent readers (meshio, h5py)."""
-import re
 import xml.etree.ElementTree as ET
 
 import h5py
