@@ -211,9 +211,17 @@ class PhaseFieldStepper:
                        else self.split.drive(drive))  # 2 psi+ with a split
         zt, w = self.fes_z.TnT()
         gamma, eps = self.gamma, pf.epsilon
+        # The z-matrix is  K + (alpha2/dt) M + D(u):  K and M change only with the mesh, so
+        # they are assembled once per mesh and only the drive part D is assembled per step
+        # (its matrix then receives K + (alpha2/dt) M; all three share the sparsity pattern
+        # of fes_z). Assembling all of it every step cost ~30 % more (docs/benchmarks.md).
         self.a_z = ngs.BilinearForm(self.fes_z, symmetric=True)
-        self.a_z += (eps * gamma * ngs.grad(zt) * ngs.grad(w)
-                     + (pf.alpha2 * inv_dt + gamma / eps + self._drive) * zt * w) * dx
+        self.a_z += self._drive * zt * w * dx
+        self._k_z = ngs.BilinearForm(self.fes_z, symmetric=True)
+        self._k_z += (eps * gamma * ngs.grad(zt) * ngs.grad(w) + gamma / eps * zt * w) * dx
+        self._m_z = ngs.BilinearForm(self.fes_z, symmetric=True)
+        self._m_z += zt * w * dx
+        self._z_fixed_assembled = False
         self.f_z = ngs.LinearForm((pf.alpha2 * inv_dt * self.z + self._drive) * w * dx)
         self._inv_z = None
 
@@ -424,7 +432,7 @@ class PhaseFieldStepper:
     def _solve_z(self) -> int:
         """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
         with self.timer.phase("z: assemble"):
-            self.a_z.Assemble()
+            self._assemble_z_matrix()
             self.f_z.Assemble()
         with self.timer.phase("z: solve"):
             iterations = self._solve_z_system()
@@ -433,6 +441,19 @@ class PhaseFieldStepper:
                               f"(t={self.time.Get():g}); "
                               "lower time.dt")
         return iterations
+
+    def _assemble_z_matrix(self) -> None:
+        """a_z.mat = K + (alpha2/dt) M + D(u): the drive D assembled, K and M once per mesh."""
+        if not self._z_fixed_assembled:
+            self._k_z.Assemble()
+            self._m_z.Assemble()
+            self._z_fixed_assembled = True
+        self.a_z.Assemble()
+        values = self.a_z.mat.AsVector()
+        k, m = self._k_z.mat.AsVector(), self._m_z.mat.AsVector()
+        if not (len(values) == len(k) == len(m)):  # never seen; the forms share fes_z
+            raise RuntimeError("the z-forms do not share a sparsity pattern")
+        values.data += k + (self.scene.phase_field.alpha2 * self.inv_dt.Get()) * m
 
     def _solve_z_system(self) -> int:
         solver = self.scene.discretization.z_solver
