@@ -94,7 +94,7 @@ def presets() -> dict[str, Preset]:
     mode3 = ROOT / "demos" / "mode3_slit.toml"
     quick = Preset(
         mode3, ["phase_field.epsilon=0.04", "time.dt=1e-3", "time.t_end=0.14"],
-        {**_mode3_runs([0.04, 0.02, 0.01], 0.02, [1000, 2000, 4000, 6000]),
+        {**_mode3_runs([0.04, 0.02, 0.01], 0.02, [1000, 2000, 3000, 4000, 6000]),
          "uniform P1 h=0.005": _uniform(0.005, 1), "uniform P2 h=0.005": _uniform(0.005, 2)},
         # finer than every run at the crack: h = eps/20 in the core, eps/8 in the band (a
         # uniform P2 mesh of eps/8 is one of the runs, a check on the reference)
