@@ -15,7 +15,8 @@ Layout (``format_version`` 1)::
     /scene                 the resolved scene as TOML text; attrs: sha256
     /mesh/                 see MeshArrays
     /fields/u, u_prev, z   dof vectors (Fletcher-32 checksums); attrs: space, order, dim
-    /adapter/              attrs: eta_total, adaptations (JSON); datasets last_tip, achieved
+    /adapter/              attrs: eta_total, adaptations (JSON), vertex_density(_measured);
+                           datasets last_tip, achieved
 
 A checkpoint is refused for a scene that differs in a key other than :data:`IGNORED_KEYS`
 (``[output]`` and ``time.t_end``: a restart may write differently or run longer).
@@ -133,6 +134,10 @@ def _write_adapter(f: h5py.File, stepper: "PhaseFieldStepper") -> None:
         return
     group = f.create_group("adapter")
     group.attrs["eta_total"] = float(adapter.eta_total)
+    # the learned vertex constant decides the next meshes: without it a restart remeshes
+    # differently from the uninterrupted run
+    group.attrs["vertex_density"] = float(adapter.density.value)
+    group.attrs["vertex_density_measured"] = bool(adapter.density.measured)
     if adapter.last_tip is not None:
         group.create_dataset("last_tip", data=np.asarray(adapter.last_tip, dtype=np.float64))
     if adapter.achieved is not None:
@@ -177,7 +182,10 @@ def _read_adapter(group: h5py.Group) -> dict[str, Any]:
     return {"eta_total": float(group.attrs["eta_total"]),
             "last_tip": group["last_tip"][()] if "last_tip" in group else None,
             "achieved": tuple(float(v) for v in group["achieved"][()]) if "achieved" in group else None,
-            "adaptations": json.loads(str(group.attrs["adaptations"]))}
+            "adaptations": json.loads(str(group.attrs["adaptations"])),
+            "vertex_density": (float(group.attrs["vertex_density"]),
+                               bool(group.attrs["vertex_density_measured"]))
+            if "vertex_density" in group.attrs else None}
 
 
 # -- restoring --------------------------------------------------------------------------------
@@ -218,6 +226,8 @@ def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> No
     adapter.eta_total = saved["eta_total"]
     adapter.last_tip = None if saved["last_tip"] is None else np.array(saved["last_tip"])
     adapter.achieved = saved["achieved"]
+    if saved.get("vertex_density") is not None:  # absent in older checkpoints
+        adapter.density.value, adapter.density.measured = saved["vertex_density"]
     if saved["adaptations"]:
         from .adaptivity import Adaptation
         stepper.adaptations = [Adaptation(**record) for record in saved["adaptations"]]

@@ -83,8 +83,12 @@ def test_3d_adaptive_restart_continues_exactly(tmp_path):
     run_scene(scene(0.2), tmp_path / "part", restart=True, plots=False)
     full, part = read_history(tmp_path / "full" / "history.csv"), read_history(tmp_path / "part" / "history.csv")
     assert list(full) == list(part) and "tip_z" in full
-    for column in ("step", "nv", "E_total", "crack_length", "tip_z", "Fy_top", "n_adapt"):
+    for column in ("step", "nv", "n_adapt"):  # the same steps on the same meshes
         assert part[column][-1] == full[column][-1], column
+    # To round-off: with two or more NGSolve threads the parallel assembly sums element
+    # contributions in varying order (seen: E_total 0.04688722963559155 vs ...154).
+    for column in ("E_total", "crack_length", "tip_z", "Fy_top"):
+        assert part[column][-1] == pytest.approx(full[column][-1], rel=1e-10, abs=1e-14), column
 
 
 def _as_dict(scene):

@@ -131,23 +131,28 @@ def test_restart_after_a_mesh_change(tmp_path):
 
 
 def test_adaptivity_state_round_trip(scene, reference, tmp_path):
-    """What decides the next mesh change (last tip, achieved sizes, eta) is restored."""
+    """What decides the next mesh change (last tip, achieved sizes, eta, the learned vertex
+    constant) is restored."""
     from types import SimpleNamespace
 
-    def with_adapter(stepper, tip, achieved, eta):
-        stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta)
+    from ngfrac.meshing import VertexDensity
+
+    def with_adapter(stepper, tip, achieved, eta, density=None):
+        stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta,
+                                          density=density or VertexDensity())
         stepper.adaptations = []
         return stepper
 
     state = load_checkpoint(reference[1], scene)
     source = PhaseFieldStepper(scene, mesh=state.build_mesh())
     restore(source, state)
-    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125)
+    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125, VertexDensity(1.37, True))
     save_checkpoint(source, tmp_path / "adaptive.h5")
     target = with_adapter(PhaseFieldStepper(scene, mesh=state.build_mesh()), None, None, np.nan)
     restore(target, load_checkpoint(tmp_path / "adaptive.h5", scene))
     np.testing.assert_array_equal(target.adapter.last_tip, [0.31, 0.5])
     assert target.adapter.achieved == (0.01, 0.004) and target.adapter.eta_total == 0.125
+    assert (target.adapter.density.value, target.adapter.density.measured) == (1.37, True)
     with pytest.raises(CheckpointError, match="disagree on whether the mesh adapts"):
         restore(PhaseFieldStepper(scene, mesh=state.build_mesh()),
                 load_checkpoint(tmp_path / "adaptive.h5", scene))
