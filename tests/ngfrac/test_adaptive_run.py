@@ -1,4 +1,7 @@
 """A full adaptive run of the slit demo (quick sizes): cap, hmin, bounds, transfers."""
+import os
+
+import ngsolve as ngs
 import numpy as np
 import pytest
 
@@ -34,6 +37,23 @@ class TransferWatch:
 
 @pytest.fixture(scope="module")
 def adaptive_run():
+    """One adaptive run, on ONE NGSolve thread so that its trajectory is reproducible.
+
+    With two threads the parallel assembly sums in varying order, and the adaptive run
+    amplifies that round-off: when and where the mesh changes moves with it. Of three runs of
+    this scene at the same commit with two threads, one (a fresh clone) had a transfer that
+    lowered the crack length by 0.63 % and a final mesh 2.2x coarser than h_band at the right
+    edge, after the crack had cut the plate and the vertex cap bound hard; the other two, and
+    the one-thread run, stay below 0.12 % and follow the crack (issue #3 notes this as open).
+    """
+    ngs.SetNumThreads(1)
+    try:
+        return _adaptive_run()
+    finally:
+        ngs.SetNumThreads(int(os.environ.get("NGFRAC_THREADS") or os.cpu_count() or 1))
+
+
+def _adaptive_run():
     scene = scene_from(demo_data(), "phase_field.epsilon=0.04", "time.dt=1e-3",
                        f"adaptivity.max_vertices={CAP}", f"adaptivity.hmin={HMIN}")
     stepper = PhaseFieldStepper(scene)
