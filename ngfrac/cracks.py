@@ -142,3 +142,30 @@ def crack_tip(points: np.ndarray, z_values: np.ndarray,
     distance = distance_to_cracks(candidates, polylines)
     farthest = int(np.argmax(distance))
     return candidates[farthest] if distance[farthest] > band else first
+
+
+def crack_direction(points: np.ndarray, z_values: np.ndarray, tip: np.ndarray, radius: float,
+                    threshold: float = 0.5) -> np.ndarray | None:
+    """The direction in which a crack runs at its tip, or None when it cannot be told.
+
+    The unit vector from the centroid of the cracked nodes (``z >= threshold``) within
+    ``radius`` of ``tip`` to the tip: behind a tip the crack fills the disc's back half, so
+    the centroid lies about radius/2 behind it. None if the tip is not finite or the centroid
+    is closer to the tip than radius/10 (no crack behind the tip, e.g. an isolated spot).
+
+    Parameters
+    ----------
+    points, z_values : node coordinates (n, d) and node values of z
+    tip : (d,) array
+    radius : float
+        How far behind the tip to look (a few epsilon).
+    """
+    tip = np.asarray(tip, dtype=float)[: points.shape[1]]
+    if not np.all(np.isfinite(tip)):
+        return None
+    near = (np.asarray(z_values) >= threshold) & (np.linalg.norm(points - tip, axis=1) <= radius)
+    if not np.any(near):
+        return None
+    offset = tip - points[near].mean(axis=0)
+    length = float(np.linalg.norm(offset))
+    return offset / length if length > radius / 10 else None

@@ -530,7 +530,8 @@ class Adaptivity(_Section):
     Sizes are 0 for "derived from epsilon": ``h_crack`` (where z >= 0.9, the crack core)
     defaults to max(hmin, epsilon/10), ``h_band`` (where z >= 0.1) to epsilon/4, ``h_tip``
     (within ``tip_margin`` of the tip) to h_band, ``hmax`` to a tenth of the shorter side,
-    ``tip_margin`` to 4 epsilon.
+    ``tip_margin`` to 4 epsilon. ``tip_lane`` (2D) also asks for h_crack in a wedge of length
+    ``tip_margin`` ahead of the tip along the crack, so the core runs in fine elements.
     """
 
     SECTION: ClassVar[str] = "adaptivity"
@@ -544,6 +545,7 @@ class Adaptivity(_Section):
     h_band: float = 0.0
     h_tip: float = 0.0
     tip_margin: float = 0.0
+    tip_lane: bool = True
 
     def validate(self) -> None:
         s = self.SECTION

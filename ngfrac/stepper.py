@@ -283,6 +283,7 @@ class PhaseFieldStepper:
         if self.adapter is None:
             raise RuntimeError("adaptivity is not enabled in this scene ([adaptivity] enabled = true)")
         tip = self.tip() if tip is None else tip
+        reason, self.adapter.reason = self.adapter.reason or "requested", ""
         eps = self.scene.phase_field.epsilon
         nv_before = self.mesh.nv
         length_before = crack_length(self.z, eps)
@@ -307,7 +308,7 @@ class PhaseFieldStepper:
         self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), tip)
         record = Adaptation(step=self.k, nv_before=nv_before, nv_after=self.mesh.nv,
                             eta_total=self.adapter.eta_total, crack_length_before=length_before,
-                            crack_length_after=crack_length(self.z, eps), **times)
+                            crack_length_after=crack_length(self.z, eps), reason=reason, **times)
         self.adaptations.append(record)
         log.info("step %d: new mesh %d -> %d vertices in %.2f s", self.k, nv_before, self.mesh.nv,
                  sum(times.values()))

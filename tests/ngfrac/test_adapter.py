@@ -1,0 +1,105 @@
+"""MeshAdapter's decisions: the lane ahead of the tip, and the tip that stops at the boundary."""
+from __future__ import annotations
+
+import numpy as np
+import ngsolve as ngs
+import pytest
+
+from ngfrac.adaptivity import MeshAdapter
+from ngfrac.cracks import crack_direction, distance_to_polylines, optimal_profile
+from ngfrac.geometry import build_mesh
+from ngfrac.meshing import ElementGeometry
+from ngfrac.nodal import LagrangeNodes
+
+from scenes import quick_slit
+
+EPS = 0.04
+SLIT = [(0.0, 0.5), (0.5, 0.5)]
+
+
+def _grid(n: int = 101) -> np.ndarray:
+    axis = np.linspace(0.0, 1.0, n)
+    return np.stack(np.meshgrid(axis, axis, indexing="ij"), axis=-1).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("slit, expected", [
+    (SLIT, (1.0, 0.0)),
+    ([(0.0, 0.5), (0.4, 0.5), (0.5, 0.4)], (2 ** -0.5, -(2 ** -0.5))),
+])
+def test_crack_direction_follows_the_last_stretch_of_the_crack(slit, expected):
+    points = _grid()
+    z = optimal_profile(distance_to_polylines(points, [slit]), EPS)
+    direction = crack_direction(points, z, np.array(slit[-1]), radius=2 * EPS)
+    angle = np.degrees(np.arccos(np.clip(direction @ np.array(expected), -1, 1)))
+    assert angle < 12.0, (direction, angle)
+
+
+def test_crack_direction_is_unknown_without_a_crack_behind_the_tip():
+    points = _grid()
+    spot = np.where(np.linalg.norm(points - 0.5, axis=1) < 1e-9, 1.0, 0.0)
+    assert crack_direction(points, spot, np.array([0.5, 0.5]), radius=2 * EPS) is None
+    assert crack_direction(points, spot, np.array([np.nan, np.nan]), radius=2 * EPS) is None
+
+
+@pytest.fixture(scope="module")
+def slit_state():
+    """The quick slit scene, adaptive, on a uniform mesh with z0 of the slit (P2 z)."""
+    scene = quick_slit("adaptivity.enabled=true")
+    mesh = build_mesh(scene.geometry, 0.01, [c.points for c in scene.cracks])
+    fes = ngs.H1(mesh, order=2)
+    z, nodes = ngs.GridFunction(fes), LagrangeNodes(fes)
+    nodes.assign(z, optimal_profile(distance_to_polylines(nodes.points, [SLIT]), EPS))
+    return scene, mesh, nodes, z
+
+
+def _sizes_at(scene, mesh, nodes, z, points):
+    adapter = MeshAdapter(scene)
+    eta = np.zeros(mesh.ne)
+    sizes = adapter.element_sizes(mesh, nodes, z, eta, np.array([0.5, 0.5]))
+    geom = ElementGeometry.of(mesh)
+    nearest = [int(np.argmin(np.linalg.norm(geom.centroids - p, axis=1))) for p in points]
+    return adapter.sizes, sizes[nearest]
+
+
+def test_lane_asks_for_h_crack_ahead_of_the_tip_and_not_beside_it(slit_state):
+    scene, mesh, nodes, z = slit_state
+    ahead, beside = (0.5 + 2.5 * EPS, 0.5), (0.5, 0.5 + 2.5 * EPS)
+    sizes, (at_ahead, at_beside) = _sizes_at(scene, mesh, nodes, z, [ahead, beside])
+    assert at_ahead == pytest.approx(sizes.h_crack)
+    assert at_beside == pytest.approx(sizes.h_band)  # the tip disc, not the lane
+    assert sizes.lane_length == pytest.approx(sizes.tip_margin)
+
+
+def test_without_the_lane_ahead_of_the_tip_is_the_disc_size(slit_state):
+    scene, mesh, nodes, z = slit_state
+    no_lane = quick_slit("adaptivity.enabled=true", "adaptivity.tip_lane=false")
+    sizes, (at_ahead,) = _sizes_at(no_lane, mesh, nodes, z, [(0.5 + 2.5 * EPS, 0.5)])
+    assert sizes.lane_length == 0
+    assert at_ahead == pytest.approx(sizes.h_band)
+
+
+def test_tip_stops_being_chased_once_it_reached_the_boundary(slit_state):
+    scene, mesh, nodes, z = slit_state
+    adapter = MeshAdapter(scene)
+    values = nodes.values(z)
+    adapter.remember(mesh, nodes, values, np.array([0.7, 0.5]))
+    assert not adapter.tip_stopped
+    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.52]))
+    assert adapter.reason == "tip moved"
+    adapter.remember(mesh, nodes, values, np.array([1.0, 0.52]))
+    assert adapter.tip_stopped
+    # the farthest cracked node now wanders along the edge: no new mesh for that, and the
+    # tip of record stays where the crack arrived
+    assert not adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.3]))
+    adapter.remember(mesh, nodes, values, np.array([1.0, 0.3]))
+    np.testing.assert_array_equal(adapter.last_tip, [1.0, 0.52])
+
+
+def test_a_crack_whose_tip_starts_on_the_boundary_is_always_chased(slit_state):
+    _, mesh, nodes, z = slit_state
+    edge_crack = quick_slit("adaptivity.enabled=true", "cracks.0.points=[[0.5, 0.5], [1.0, 0.5]]")
+    adapter = MeshAdapter(edge_crack)
+    values = nodes.values(z)
+    adapter.remember(mesh, nodes, values, np.array([1.0, 0.5]))
+    assert not adapter.tip_stopped
+    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([0.6, 0.5]))
