@@ -34,6 +34,11 @@ log = logging.getLogger(__name__)
 
 CORE_LEVEL = 0.9
 BAND_LEVEL = 0.1
+CORE_GROWTH = 1.5
+"""A new mesh when the core reached elements this much larger than right after the change."""
+BAND_GROWTH = 2.0
+"""The same for the band. 1.5 remeshed for the faint damage (z ~ 0.1) that spreads far ahead
+of the tip before it runs; 2 makes fewer changes at equal accuracy (docs/adaptivity.md)."""
 LANE_SPREAD = 0.27
 """The tip lane widens by this much per unit length ahead of the tip (tan 15 deg)."""
 
@@ -226,9 +231,10 @@ class MeshAdapter:
                        tip: np.ndarray) -> bool:
         """True when the crack has outgrown the fine part of the mesh made last time.
 
-        That is: the tip moved by more than half the tip margin, or the band or the
-        core of the crack reached elements 1.5 times larger than the largest it had right
-        after the last mesh change (the cap may have kept those above h_band, h_crack).
+        That is: the tip moved by more than half the tip margin (not once it has stopped at
+        the boundary, :attr:`tip_stopped`), or the core (band) of the crack reached elements
+        :data:`CORE_GROWTH` (:data:`BAND_GROWTH`) times larger than the largest it had right
+        after the last mesh change (the cap may have kept those above h_crack, h_band).
         Cheap (numpy on cached arrays), so it can run every step.
         """
         if self.last_tip is None or self.achieved is None:
@@ -237,9 +243,9 @@ class MeshAdapter:
                 and np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2):
             return self._because("tip moved")
         band, core = self._band_sizes(mesh, nodes, z_values)
-        if band > 1.5 * self.achieved[0]:
+        if band > BAND_GROWTH * self.achieved[0]:
             return self._because(f"band reached h = {band:.3g} (had {self.achieved[0]:.3g})")
-        if core > 1.5 * self.achieved[1]:
+        if core > CORE_GROWTH * self.achieved[1]:
             return self._because(f"core reached h = {core:.3g} (had {self.achieved[1]:.3g})")
         return False
 

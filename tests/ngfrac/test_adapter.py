@@ -103,3 +103,4 @@ def test_a_crack_whose_tip_starts_on_the_boundary_is_always_chased(slit_state):
     adapter.remember(mesh, nodes, values, np.array([1.0, 0.5]))
     assert not adapter.tip_stopped
     assert adapter.wants_new_mesh(mesh, nodes, values, np.array([0.6, 0.5]))
+
