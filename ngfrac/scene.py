@@ -630,14 +630,11 @@ class Scene:
                              f"set model.kind = {MODELS_3D[0]!r}")
 
     def _check_split(self) -> None:
-        """A split needs a vector model; the spectral one is 2D only (ngfrac.splits)."""
+        """A split needs a vector model (ngfrac.splits)."""
         split, kind = self.material.split, self.model.kind
         if split != "none" and kind == "mode3":
             raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
                              "model.kind = 'mode3' has no tension or compression: set split = 'none'")
-        if split == "miehe" and kind not in ("plane_strain", "plane_stress"):
-            raise SceneError(f"material.split = 'miehe' is implemented for the plane models only, "
-                             f"not model.kind = {kind!r}: use split = 'amor' in 3D")
 
     def _domain_text(self) -> str:
         return " x ".join(f"[{o}, {o + e}]" for o, e in zip(self.geometry.origin, self.geometry.extent))

@@ -57,8 +57,9 @@ computed: round-off of ~1e-16 |e| picks it, and either side gives a valid Newton
 from __future__ import annotations
 
 import logging
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Iterator
 
 import ngsolve as ngs
 import numpy as np
@@ -248,6 +249,26 @@ class EnergySplit:
         """``((1-z)^2 + eta) psi+ + psi-`` at u, the integrand of E_el."""
         e = ngs.Sym(ngs.grad(u))
         return (((1 - z) ** 2 + eta) * self.psi_plus(e) + self.psi_minus(e)).Compile()
+
+
+@contextmanager
+def tangent_integrators(split: EnergySplit | None, dim: int) -> Iterator[None]:
+    """Create the u-form's integrators inside this block.
+
+    For the 3D spectral split they differentiate the integrand symbolically
+    (``ngsglobals.symbolic_integrator_uses_diff``, read when an integrator is created): NGSolve
+    otherwise evaluates the whole tangent once per pair of gradient components. Measured on
+    one thread, 3,576 dofs, median of 5: 314 ms against 2,477 ms per assembly, the same matrix
+    to 2e-16 (no split 147 ms, Amor 164 ms, which it does not speed up).
+    """
+    enabled = split is not None and split.kind == "miehe" and dim == 3
+    previous = ngs.ngsglobals.symbolic_integrator_uses_diff
+    if enabled:
+        ngs.ngsglobals.symbolic_integrator_uses_diff = True
+    try:
+        yield
+    finally:
+        ngs.ngsglobals.symbolic_integrator_uses_diff = previous
 
 
 def make_split(model: Any, kind: str) -> EnergySplit | None:

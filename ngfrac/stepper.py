@@ -32,7 +32,7 @@ from .profiling import PhaseTimer
 from .reactions import reaction_columns
 from .scene import Scene
 from .linsolve import iterations as solver_iterations, register_preconditioner, u_inverse, update
-from .splits import NewtonSolver, make_split
+from .splits import NewtonSolver, make_split, tangent_integrators
 from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
@@ -195,7 +195,8 @@ class PhaseFieldStepper:
         if pf.alpha1 > 0:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
-        self.a_u += stiffness * dx
+        with tangent_integrators(self.split, mesh.dim):
+            self.a_u += stiffness * dx
         self._pre_u = register_preconditioner(self.a_u, disc.u_solver)  # before any assembly
         self.m_u = None
         if pf.alpha1 > 0:

@@ -141,22 +141,8 @@ def slab(split, n_steps=6):
     })
 
 
-@pytest.fixture
-def miehe_in_3d(monkeypatch):
-    """ngfrac/scene.py (outside this change) still refuses split = 'miehe' for a 3D model;
-    lift only that refusal so that 3D runs go through the stepper. Drop this fixture when
-    the scene accepts it."""
-    check = Scene._check_split
-
-    def check_except_miehe_in_3d(self):
-        if self.material.split != "miehe":
-            check(self)
-
-    monkeypatch.setattr(Scene, "_check_split", check_except_miehe_in_3d)
-
-
 @pytest.mark.parametrize("split", SPLITS)
-def test_splits_in_3d_agree_under_triaxial_stretch(split, miehe_in_3d):
+def test_splits_in_3d_agree_under_triaxial_stretch(split):
     """Every principal strain is positive (Miehe: all three about equal), psi+ = psi."""
     runs = {s: np.array([(r.E_el, r.E_surf) for r in PhaseFieldStepper(box(s)).run()])
             for s in ("none", split)}
@@ -164,7 +150,7 @@ def test_splits_in_3d_agree_under_triaxial_stretch(split, miehe_in_3d):
     np.testing.assert_allclose(runs[split], runs["none"], rtol=1e-9)
 
 
-def test_compressed_3d_slit_cracks_only_without_a_split(miehe_in_3d):
+def test_compressed_3d_slit_cracks_only_without_a_split():
     """The 2D test above in a slab: compressed on every face, the slit runs through the
     slab without a split; with the spectral split psi+ = 0 and z does not change at all."""
     records = {s: list(PhaseFieldStepper(slab(s)).run()) for s in ("none", "miehe")}
@@ -358,3 +344,26 @@ def test_3d_psi_plus_against_eigvalsh(state, cube):
         expected = np.linalg.eigvalsh(a)[::-1]
         np.testing.assert_allclose(strains, np.broadcast_to(expected, strains.shape), rtol=0,
                                    atol=1e-14 * max(np.abs(a).max(), 1e-300))
+
+
+def test_differentiating_integrators_give_the_same_3d_tangent_and_are_switched_back(cube):
+    """The stepper creates the 3D Miehe u-form inside tangent_integrators (8x faster to
+    assemble): the matrix must not change, and the global flag must be restored."""
+    from ngfrac.splits import tangent_integrators
+    rng = np.random.default_rng(7)
+    fes = ngs.VectorH1(cube, order=2)
+    z = ngs.GridFunction(ngs.H1(cube, order=1))
+    z.Set(0.5 * ngs.x)
+    u = ngs.GridFunction(fes)
+    u.Set(random_smooth_field(rng))
+    split = EnergySplit("miehe", LAM, MU, dim=3, bulk_dim=3)
+    trial, test = fes.TnT()
+    matrices = []
+    for fast in (False, True):
+        form = ngs.BilinearForm(fes, symmetric=True)
+        with tangent_integrators(split if fast else None, 3):
+            form += split.tangent(u, trial, test, z, 1e-3) * ngs.dx(bonus_intorder=2)
+        assert ngs.ngsglobals.symbolic_integrator_uses_diff is False
+        matrices.append(form.Assemble().mat.ToDense().NumPy())
+    plain, fast = matrices
+    assert np.abs(fast - plain).max() < 1e-12 * np.abs(plain).max()
