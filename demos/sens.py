@@ -17,11 +17,14 @@ u = 9.5e-3 mm, F = 0.60 kN.
 This model has no split: sigma:e drives z whatever the sign of the stresses, and ahead of a
 mode II tip sigma:e is largest straight ahead (the shear strain), not along the hoop-stress
 direction. So the notch grows straight ahead as a shear band along y = 0.5 to the right edge,
-and the force peaks and then drops to nearly zero. Measured
-(``NGFRAC_THREADS=1 python demos/sens.py --set time.t_end=1.3e-2``, epsilon = 0.015 mm, 650
-steps, 27 min on a 2-core machine shared at a load of about 8): peak 0.512 kN at
-u = 0.0102 mm (15% below the sharp notch's Griffith load 0.603 kN at 0.0095 mm), below
-0.005 kN from u = 0.0119 mm on, the crack straight (+1.0 degrees) to the right edge.
+and the force peaks and then drops to nearly zero. Measured (``python demos/sens.py``,
+epsilon = 0.015 mm, P2, adaptive up to 8,000 vertices, adaptive steps of 2e-5..3.2e-4 mm,
+261 steps to u = 0.018 mm; 4.8 min with ``NGFRAC_THREADS=1`` while the test suite ran on the
+other core): peak 0.509 kN at u = 0.0101 mm (16% below the sharp notch's Griffith load
+0.603 kN at 0.0095 mm), the crack straight (+0.8 degrees) to the right edge, below 0.005 kN
+from u = 0.0118 mm on. With fixed steps of 2e-5 mm (``--set time.adaptive=false --set time.t_end=1.3e-2``, 650 steps,
+27 min on the machine shared at a load of about 8, before relax_core): peak 0.512 kN at
+u = 0.0102 mm.
 """
 from __future__ import annotations
 

@@ -231,17 +231,19 @@ class MeshAdapter:
                        tip: np.ndarray) -> bool:
         """True when the crack has outgrown the fine part of the mesh made last time.
 
-        That is: the tip moved by more than half the tip margin (not once it has stopped at
-        the boundary, :attr:`tip_stopped`), or the core (band) of the crack reached elements
+        That is: the tip moved by more than half the tip margin or reached the boundary (not
+        once it has stopped there, :attr:`tip_stopped`), or the core (band) of the crack reached elements
         :data:`CORE_GROWTH` (:data:`BAND_GROWTH`) times larger than the largest it had right
         after the last mesh change (the cap may have kept those above h_crack, h_band).
         Cheap (numpy on cached arrays), so it can run every step.
         """
         if self.last_tip is None or self.achieved is None:
             return self._because("first mesh")
-        if (not self.tip_stopped and np.all(np.isfinite(tip))
-                and np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2):
-            return self._because("tip moved")
+        if not self.tip_stopped and np.all(np.isfinite(tip)):
+            if np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2:
+                return self._because("tip moved")
+            if self._may_stop_at_boundary and self._at_boundary(tip):
+                return self._because("tip reached the boundary")  # one last mesh for the cut
         band, core = self._band_sizes(mesh, nodes, z_values)
         if band > BAND_GROWTH * self.achieved[0]:
             return self._because(f"band reached h = {band:.3g} (had {self.achieved[0]:.3g})")

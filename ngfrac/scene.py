@@ -532,6 +532,10 @@ class Adaptivity(_Section):
     (within ``tip_margin`` of the tip) to h_band, ``hmax`` to a tenth of the shorter side,
     ``tip_margin`` to 4 epsilon. ``tip_lane`` (2D) also asks for h_crack in a wedge of length
     ``tip_margin`` ahead of the tip along the crack, so the core runs in fine elements.
+    ``relax_core`` (off by default; on in the SENT/SENS demos): after a transfer, one
+    z-sub-step at the transferred u restores the open crack (kept where z >= 1/2 and the
+    sub-step gives z >= 0.95, outside the tip disc), which interpolation at the new nodes
+    lowers where they miss its ridge, so force curves do not jump after a mesh change.
     """
 
     SECTION: ClassVar[str] = "adaptivity"
@@ -546,6 +550,7 @@ class Adaptivity(_Section):
     h_tip: float = 0.0
     tip_margin: float = 0.0
     tip_lane: bool = True
+    relax_core: bool = False
 
     def validate(self) -> None:
         s = self.SECTION

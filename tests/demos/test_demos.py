@@ -19,9 +19,10 @@ QUICK_EXTRA = {
     # P1 u (order=1) where the quick P2 run took over a minute (SENS: 106 s against 54 s).
     "mode12_kink": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=4e-3"],
     "mode12_stripes": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=4e-3"],
-    "sent": ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3"],
+    "sent": ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3",
+             "time.adaptive=false"],
     "sens": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=2e-4",
-             "time.t_end=1.6e-2"],
+             "time.t_end=1.6e-2", "time.adaptive=false"],
     # 3D: fixed steps of 0.04 (75 steps) and at most 1,000 vertices, ~70-100 s.
     "box3d": ["time.dt=0.04", "time.adaptive=false", "adaptivity.max_vertices=1000"],
 }
@@ -143,12 +144,15 @@ def check_sens(history):
     # sigma:e, which drives z here, is largest straight ahead of a mode II tip, while the
     # hoop-stress kink (-70.5 degrees, downwards, what split models show) needs tension there.
     # The crack runs along the notch line and the force falls to a fraction of its peak.
+    # Once the crack has cut through to the right edge, the tip (the farthest node with
+    # z >= 1/2) moves along that edge as z spreads there: those points are not the path.
     force = history["Fx_top"]
     peak = int(np.argmax(force))
     assert force[-1] < 0.5 * force[peak], f"no drop: peak {force[peak]:.4f}, end {force[-1]:.4f} kN"
     _, track = crack_angle(history, (0.5, 0.5), 0.0, 1.0)
     assert track.points[:, 0].max() > 0.6, track.text()
-    assert np.abs(track.points[:, 1] - 0.5).max() < 0.06, track.text()
+    path = track.points[track.points[:, 0] < 0.99]
+    assert np.abs(path[:, 1] - 0.5).max() < 0.06, track.text()
 
 
 def check_box3d(history):

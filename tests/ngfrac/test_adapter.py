@@ -104,3 +104,14 @@ def test_a_crack_whose_tip_starts_on_the_boundary_is_always_chased(slit_state):
     assert not adapter.tip_stopped
     assert adapter.wants_new_mesh(mesh, nodes, values, np.array([0.6, 0.5]))
 
+
+
+def test_a_tip_that_reaches_the_boundary_between_changes_asks_for_one_last_mesh(slit_state):
+    scene, mesh, nodes, z = slit_state
+    adapter = MeshAdapter(scene)
+    values = nodes.values(z)
+    adapter.remember(mesh, nodes, values, np.array([0.97, 0.5]))  # less than tip_margin/2 away
+    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.5]))
+    assert adapter.reason == "tip reached the boundary"
+    adapter.remember(mesh, nodes, values, np.array([1.0, 0.5]))
+    assert adapter.tip_stopped
