@@ -24,9 +24,10 @@ the crack turns downwards. Three predictions, from the local to the global:
 - The paper: "perpendicular to the displacement", -45 degrees, which is where a crack whose
   faces separate rigidly by (1, 1) would open in pure mode I.
 
-Measured (``python demos/mode12_kink.py``, 420 s on one core; the ridge of z between epsilon
-and 4 epsilon from the initial tip, a line through the tip): -19.1 degrees here, -21.0 from the
-tip history, against -22.4 predicted; the crack starts at t = 0.182 (LEFM: 0.178). On the unit square: about -25 degrees, where the path bends from the LEFM kink
+Measured (``python demos/mode12_kink.py``, 91 s on the quiet 2-core machine; the ridge of z
+between epsilon and 4 epsilon from the initial tip, a line through the tip): -18.7 degrees
+here, -19.3 from the tip history, against -22.4 predicted (before the tip lane of the adaptive
+mesh, 420 s on one loaded core: -19.1 and -21.0); the crack starts at t = 0.182 (LEFM: 0.178). On the unit square: about -25 degrees, where the path bends from the LEFM kink
 towards -22.5 within a few epsilon. The phase-field slit has a rounded end of radius
 ~epsilon and AT2 without a split is driven by all of sigma:e, which ahead of a tip under shear
 is largest straight ahead, so the measured turn is somewhat smaller than the LEFM kink.

@@ -14,12 +14,14 @@ and turns by -22.4 degrees. Here:
 
 - the crack starts earlier, when G reaches the toughness of the weak stripe at the tip:
   t = sqrt(0.40/15.8) = 0.159 (this LEFM estimate uses the tip value; the process zone of a
-  few epsilon sees a little more). Measured (``python demos/mode12_stripes.py``, 973 s on a
-  loaded machine): t = 0.167, against 0.182 for gamma = 0.5;
+  few epsilon sees a little more). Measured (``python demos/mode12_stripes.py``, 96 s on the
+  quiet 2-core machine; 973 s loaded before the tip lane): t = 0.168 (0.167 before), against
+  0.182 for gamma = 0.5;
 - it turns down more steeply than in homogeneous material: the weak stripe through the tip
   runs at -45 degrees and the crack follows it part of the way before the mode mixity takes
-  it back towards -22.5 degrees. Measured between epsilon and 4 epsilon: -24.7 degrees (ridge
-  of z) and -25.5 (tip history), against -19.1 and -21.0 for gamma = 0.5.
+  it back towards -22.5 degrees. Measured between epsilon and 4 epsilon: -24.8 degrees (ridge
+  of z) and -26.9 (tip history; -24.7 and -25.5 before the tip lane), against -18.7 and -19.3
+  for gamma = 0.5.
 """
 from __future__ import annotations
 
