@@ -331,10 +331,11 @@ class PhaseFieldStepper:
         one step after a change). One z-sub-step at the transferred u, kept only where the
         crack already is (transferred z >= 1/2) and the sub-step opens it (z >=
         :data:`OPEN_LEVEL`), outside the tip disc (z never decreases, stays <= 1), restores
-        the ridge. Ahead of the crack and at its tip a z-sub-step would advance it (kept
-        wherever it gave z >= 0.95, the quick SENS crack ran to the edge instead of x = 0.86);
-        on the flanks of the band it would add damage (kept where it gave z >= 1/2, the mode
-        III crack length of the quick preset rose 1-2 % above its reference).
+        the ridge. At the tip a z-sub-step would advance the crack, and ahead of it it could
+        create damage where there was none (the z >= 1/2 condition; it changed nothing in the
+        runs measured); on the flanks of the band it would add damage (kept wherever it gave
+        z >= 1/2, the mode III crack length of the quick preset rose 1-2 % above its
+        reference). Off by default (docs/adaptivity.md: a mode III run it changed for the worse).
         """
         self._solve_z()
         old = self.nodes.values(self.z)
