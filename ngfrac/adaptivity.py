@@ -24,7 +24,7 @@ import ngsolve as ngs
 import estimators
 
 from .cracks import crack_direction
-from .geometry import netgen_geometry
+from .geometry import _on_boundary, netgen_geometry
 from .meshing import (SIZE_RATIO, ElementGeometry, VertexDensity, adapt_mesh, edge_numbers,
                       size_field_from_indicator)
 from .nodal import LagrangeNodes
@@ -133,11 +133,8 @@ class MeshAdapter:
 
     def _at_boundary(self, point: np.ndarray) -> bool:
         """Whether a 2D point is within h_band of the rectangle's boundary."""
-        g = self.scene.geometry
-        if not np.all(np.isfinite(point)):
-            return False
-        gap = min(min(p - o, o + e - p) for p, o, e in zip(point, g.origin, g.extent))
-        return gap <= self.sizes.h_band
+        return bool(np.all(np.isfinite(point))) and _on_boundary(self.scene.geometry, point,
+                                                                 self.sizes.h_band)
 
     @property
     def tip_stopped(self) -> bool:
