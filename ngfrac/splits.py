@@ -252,7 +252,7 @@ class EnergySplit:
 
 
 @contextmanager
-def tangent_integrators(split: EnergySplit | None, dim: int) -> Iterator[None]:
+def tangent_integrators(split: EnergySplit | None) -> Iterator[None]:
     """Create the u-form's integrators inside this block.
 
     For the 3D spectral split they differentiate the integrand symbolically
@@ -261,7 +261,7 @@ def tangent_integrators(split: EnergySplit | None, dim: int) -> Iterator[None]:
     one thread, 3,576 dofs, median of 5: 314 ms against 2,477 ms per assembly, the same matrix
     to 2e-16 (no split 147 ms, Amor 164 ms, which it does not speed up).
     """
-    enabled = split is not None and split.kind == "miehe" and dim == 3
+    enabled = split is not None and split.kind == "miehe" and split.dim == 3
     previous = ngs.ngsglobals.symbolic_integrator_uses_diff
     if enabled:
         ngs.ngsglobals.symbolic_integrator_uses_diff = True
@@ -329,6 +329,7 @@ class NewtonSolver:
                  max_iterations: int = 30, preconditioner: Any = None) -> None:
         self.a, self.u, self.energy, self.order = a, u, energy, order
         self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
+        self._free = np.array(freedofs, dtype=bool)  # element by element: once, not per solve
         self.rtol, self.max_iterations = rtol, max_iterations
         self._inv = None
 
@@ -350,7 +351,6 @@ class NewtonSolver:
         converge."""
         a, vec = self.a, self.u.vec
         residual, step, start = vec.CreateVector(), vec.CreateVector(), vec.CreateVector()
-        free = np.array(self.freedofs, dtype=bool)
         result = NewtonResult(0)
         for iteration in range(self.max_iterations + 1):
             a.Assemble()
@@ -358,7 +358,7 @@ class NewtonSolver:
             scale = float(np.linalg.norm(residual.FV().NumPy()))
             if rhs is not None:
                 residual.data -= rhs
-            relative = float(np.linalg.norm(residual.FV().NumPy()[free])) / scale if scale else 0.0
+            relative = float(np.linalg.norm(residual.FV().NumPy()[self._free])) / scale if scale else 0.0
             result.residuals.append(relative)
             if relative <= self.rtol:
                 result.iterations = iteration

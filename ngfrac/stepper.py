@@ -198,7 +198,7 @@ class PhaseFieldStepper:
         if pf.alpha1 > 0:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(self.fes_u, symmetric=True)
-        with tangent_integrators(self.split, mesh.dim):
+        with tangent_integrators(self.split):
             self.a_u += stiffness * dx
         self._pre_u = register_preconditioner(self.a_u, disc.u_solver)  # before any assembly
         self.m_u = None

@@ -356,7 +356,7 @@ def test_differentiating_integrators_give_the_same_3d_tangent_and_are_switched_b
     matrices = []
     for fast in (False, True):
         form = ngs.BilinearForm(fes, symmetric=True)
-        with tangent_integrators(split if fast else None, 3):
+        with tangent_integrators(split if fast else None):
             form += split.tangent(u, trial, test, z, 1e-3) * ngs.dx(bonus_intorder=2)
         assert ngs.ngsglobals.symbolic_integrator_uses_diff is False
         matrices.append(form.Assemble().mat.ToDense().NumPy())
