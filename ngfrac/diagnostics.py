@@ -6,6 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 import ngsolve as ngs
 
+from .threads import integrate
+
 
 @dataclass(frozen=True)
 class Energies:
@@ -34,8 +36,8 @@ def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.Coefficien
     surface = 0.5 * (epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)) + z * z / epsilon)
     elastic = 0.5 * ((1 - z) ** 2 + residual_stiffness) * energy_density
     work = force_times_u if force_times_u is not None else ngs.CoefficientFunction(0.0)
-    values = ngs.Integrate(ngs.CoefficientFunction((elastic, gamma * surface, surface, work)), mesh, order=order)
-    return Energies(*(float(v) for v in values))
+    values = integrate(ngs.CoefficientFunction((elastic, gamma * surface, surface, work)), mesh, order=order)
+    return Energies(*values)
 
 
 def element_sizes(mesh: ngs.Mesh) -> np.ndarray:

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
+from .threads import integrate
+
 
 def indicator(fes: ngs.FESpace, boundary: str, component: int = 0) -> ngs.GridFunction:
     """w = e_component on the constrained dofs of ``boundary``, 0 elsewhere.
@@ -98,8 +100,8 @@ def boundary_mean(u: ngs.GridFunction, boundary: str) -> np.ndarray:
     """The mean of u over a boundary, per component (the imposed displacement of a load)."""
     mesh = u.space.mesh
     region = mesh.Boundaries(boundary)
-    length = ngs.Integrate(ngs.CoefficientFunction(1.0), mesh, ngs.BND, definedon=region)
-    return np.atleast_1d(np.asarray(ngs.Integrate(u, mesh, ngs.BND, definedon=region))) / length
+    length = integrate(1.0, mesh, vb=ngs.BND, definedon=region)
+    return np.atleast_1d(np.asarray(integrate(u, mesh, vb=ngs.BND, definedon=region))) / length
 
 
 def reaction_columns(stepper) -> dict[str, float]:

@@ -468,7 +468,9 @@ class Discretization(_Section):
     ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
-    an energy descent.
+    an energy descent. ``threaded_solves = false`` (the default) runs factorizations and
+    solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
+    thread count (:mod:`ngfrac.threads`); ``true`` threads them too.
     """
 
     SECTION: ClassVar[str] = "discretization"
@@ -478,6 +480,7 @@ class Discretization(_Section):
     z_solver: str = "sparsecholesky"
     coupling: str = "paper"
     z_update: str = "projection"
+    threaded_solves: bool = False
 
     def validate(self) -> None:
         s = self.SECTION

@@ -57,14 +57,15 @@ computed: round-off of ~1e-16 |e| picks it, and either side gives a valid Newton
 from __future__ import annotations
 
 import logging
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import ngsolve as ngs
 import numpy as np
 
 from .linsolve import iterations as solver_iterations, u_inverse, update
+from .threads import integrate, parallel, serial
 
 log = logging.getLogger(__name__)
 
@@ -322,12 +323,17 @@ class NewtonSolver:
         More Newton steps than this raise RuntimeError.
     preconditioner : ngsolve.Preconditioner, optional
         Registered with ``a`` before its first assembly; needed for ``inverse = "cg"``.
+    solves : callable, optional
+        Returns the context of factorizations and solves (default :func:`ngfrac.threads.serial`,
+        bitwise reproducible).
     """
 
     def __init__(self, a: ngs.BilinearForm, u: ngs.GridFunction, energy: Any, order: int,
                  freedofs: ngs.BitArray, inverse: str = "sparsecholesky", rtol: float = 1e-10,
-                 max_iterations: int = 30, preconditioner: Any = None) -> None:
+                 max_iterations: int = 30, preconditioner: Any = None,
+                 solves: Callable[[], AbstractContextManager] = serial) -> None:
         self.a, self.u, self.energy, self.order = a, u, energy, order
+        self.solves = solves
         self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
         self._free = np.array(freedofs, dtype=bool)  # element by element: once, not per solve
         self.rtol, self.max_iterations = rtol, max_iterations
@@ -342,7 +348,7 @@ class NewtonSolver:
 
     def total_energy(self, rhs: ngs.BaseVector | None) -> float:
         """E at the current u."""
-        value = ngs.Integrate(self.energy, self.u.space.mesh, order=self.order)
+        value = integrate(self.energy, self.u.space.mesh, order=self.order)
         return value - (ngs.InnerProduct(rhs, self.u.vec) if rhs is not None else 0.0)
 
     def solve(self, rhs: ngs.BaseVector | None = None) -> NewtonResult:
@@ -353,8 +359,10 @@ class NewtonSolver:
         residual, step, start = vec.CreateVector(), vec.CreateVector(), vec.CreateVector()
         result = NewtonResult(0)
         for iteration in range(self.max_iterations + 1):
-            a.Assemble()
-            residual.data = a.mat * vec
+            # BDDC (u_solver = 'cg') factorizes inside the assembly: no threads for it
+            with parallel() if self.preconditioner is None else self.solves():
+                a.Assemble()
+                residual.data = a.mat * vec
             scale = float(np.linalg.norm(residual.FV().NumPy()))
             if rhs is not None:
                 residual.data -= rhs
@@ -365,8 +373,9 @@ class NewtonSolver:
                 return result
             if iteration == self.max_iterations:
                 break
-            inverse = self._factorize()
-            step.data = inverse * residual
+            with self.solves():
+                inverse = self._factorize()
+                step.data = inverse * residual
             solver_iterations(inverse)  # raises if CG did not converge
             decrement2 = max(ngs.InnerProduct(step, residual), 0.0)
             # backtracking on the energy: a full step unless it raises E (Armijo, 1e-4); the

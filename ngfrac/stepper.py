@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field, fields
 from typing import Iterator
 
@@ -33,6 +34,7 @@ from .reactions import reaction_columns
 from .scene import Scene
 from .linsolve import iterations as solver_iterations, register_preconditioner, u_inverse, update
 from .splits import NewtonSolver, make_split, tangent_integrators
+from .threads import parallel, serial
 from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
@@ -248,18 +250,35 @@ class PhaseFieldStepper:
         u, v = self.fes_u.TnT()
         static = ngs.BilinearForm(self.fes_u, symmetric=True)
         static += ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v) * self.dx
-        with ngs.TaskManager():
-            solver = self.scene.discretization.u_solver
-            pre = register_preconditioner(static, solver)
+        solver = self.scene.discretization.u_solver
+        pre = register_preconditioner(static, solver)
+        with self._assembly_threads(pre):
             static.Assemble()
-            inverse = u_inverse(static, self.fes_u.FreeDofs(), solver, pre)
             residual = (-static.mat * self.u.vec).Evaluate()
             if self.f_u is not None:
                 self.f_u.Assemble()
                 residual.data += self.f_u.vec
+        with self._solves():
+            inverse = u_inverse(static, self.fes_u.FreeDofs(), solver, pre)
             self.u.vec.data += inverse * residual
         self.u_prev.vec.data = self.u.vec
         self.forces = reaction_columns(self)
+
+    # -- threads (ngfrac.threads) -------------------------------------------------------------
+    def _step_threads(self) -> AbstractContextManager:
+        """The context of a whole step: NGSolve's TaskManager with
+        ``discretization.threaded_solves`` (results then vary with the schedule), else none."""
+        return parallel() if self.scene.discretization.threaded_solves else nullcontext()
+
+    def _solves(self) -> AbstractContextManager:
+        """The context of factorizations, solves, estimators and remeshing: one thread (bitwise
+        reproducible) unless ``discretization.threaded_solves``."""
+        return nullcontext() if self.scene.discretization.threaded_solves else serial()
+
+    def _assembly_threads(self, preconditioner: object = None) -> AbstractContextManager:
+        """Threads for an assembly, unless it also sets up a registered preconditioner
+        (BDDC factorizes inside the assembly)."""
+        return parallel() if preconditioner is None else self._solves()
 
     # -- mesh adaptation --------------------------------------------------------------------
     INITIAL_PASSES = 3
@@ -268,7 +287,8 @@ class PhaseFieldStepper:
         """Resolve z0 before the first step: remesh and set z0 anew from its formula."""
         assert self.adapter is not None
         for _ in range(self.INITIAL_PASSES):
-            mesh, _ = self.adapter.new_mesh(self.mesh, self.nodes, self.z, self.tip())
+            with self._solves():
+                mesh, _ = self.adapter.new_mesh(self.mesh, self.nodes, self.z, self.tip())
             self._setup(mesh)
             self._set_initial_state()
         self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), self.tip())
@@ -291,7 +311,8 @@ class PhaseFieldStepper:
         eps = self.scene.phase_field.epsilon
         nv_before = self.mesh.nv
         length_before = crack_length(self.z, eps)
-        new_mesh, times = self.adapter.new_mesh(self.mesh, self.nodes, self.z, tip)
+        with self._solves():
+            new_mesh, times = self.adapter.new_mesh(self.mesh, self.nodes, self.z, tip)
         started = time.perf_counter()
         z_old, u_old = self.z, self.u
         self._setup(new_mesh)
@@ -381,17 +402,17 @@ class PhaseFieldStepper:
         if self.split is not None:
             self._solve_u_split()
             return
-        with self.timer.phase("u: assemble"):
+        with self.timer.phase("u: assemble"), self._assembly_threads(self._pre_u):
             self.a_u.Assemble()
             if self.f_u is not None:
                 self.f_u.Assemble()
-        with self.timer.phase("u: factorize"):
+        with self.timer.phase("u: factorize"), self._solves():
             if self._inv_u is None:
                 self._inv_u = u_inverse(self.a_u, self.fes_u.FreeDofs(),
                                         self.scene.discretization.u_solver, self._pre_u)
             else:
                 update(self._inv_u)
-        with self.timer.phase("u: solve"):
+        with self.timer.phase("u: solve"), self._solves():
             self._apply_boundary_values()
             residual = self.u.vec.CreateVector()
             if self.m_u is not None:
@@ -454,7 +475,7 @@ class PhaseFieldStepper:
             energy = energy + 0.5 * alpha1 * self.inv_dt * ngs.InnerProduct(self.u, self.u)
         return NewtonSolver(tangent, self.u, energy, self.integration_order,
                             self.fes_u.FreeDofs(), self.scene.discretization.u_solver,
-                            preconditioner=preconditioner)
+                            preconditioner=preconditioner, solves=self._solves)
 
     def _elastic_density(self) -> ngs.CoefficientFunction:
         """W with E_el = 1/2 int ((1-z)^2 + eta) W: sigma:e, or with a split
@@ -466,10 +487,10 @@ class PhaseFieldStepper:
 
     def _solve_z(self) -> int:
         """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
-        with self.timer.phase("z: assemble"):
+        with self.timer.phase("z: assemble"), parallel():
             self._assemble_z_matrix()
             self.f_z.Assemble()
-        with self.timer.phase("z: solve"):
+        with self.timer.phase("z: solve"), self._solves():
             iterations = self._solve_z_system()
         if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
             raise SolverError(f"the z-solve gave non-finite values at step {self.k + 1} "
@@ -543,7 +564,7 @@ class PhaseFieldStepper:
         """
         started = time.perf_counter()
         settings = self.scene.time
-        with ngs.TaskManager():
+        with self._step_threads():
             self.u_prev.vec.data = self.u.vec
             saved_z = self.z.vec.CreateVector()
             saved_z.data = self.z.vec
@@ -583,11 +604,11 @@ class PhaseFieldStepper:
         adapt_s = 0.0
         if self.adapter is not None and self.k % self.scene.adaptivity.every == 0:
             adapt_started = time.perf_counter()
-            with self.timer.phase("adapt: check"):
+            with self.timer.phase("adapt: check"), self._solves():
                 tip = self.tip()
                 wanted = self.adapter.wants_new_mesh(self.mesh, self.nodes, new, tip)
             if wanted:
-                with ngs.TaskManager():
+                with self._step_threads():
                     self.adapt(tip)
             adapt_s = time.perf_counter() - adapt_started
         return self.record(diagnose, dz_max=dz_max, z_iterations=iterations, dt=n * settings.dt,
@@ -606,7 +627,7 @@ class PhaseFieldStepper:
         if not diagnose:
             return StepRecord(**base)
         pf = self.scene.phase_field
-        with ngs.TaskManager(), self.timer.phase("diagnostics: energies, tip"):
+        with self.timer.phase("diagnostics: energies, tip"):
             e = energies(self.mesh, self.z, self._elastic_density(), self.gamma,
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
@@ -625,8 +646,7 @@ class PhaseFieldStepper:
         ``output.history_every`` by default) and at the last step.
         """
         every = history_every or self.scene.output.history_every
-        # One TaskManager for the whole run: starting NGSolve's threads costs ~0.1 s each time.
-        with ngs.TaskManager():
+        with self._step_threads():
             while not self.finished:
                 last = self.ticks + self._step_ticks() >= self.scene.time.n_ticks
                 yield self.step(diagnose=last or (self.k + 1) % every == 0)

@@ -44,6 +44,7 @@ import ngsolve as ngs
 from scipy.spatial import cKDTree
 
 from .nodal import LagrangeNodes
+from .threads import integrate, parallel
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +70,7 @@ def transfer(gf_old: ngs.GridFunction, fes_new: ngs.FESpace,
     """
     gf_new = ngs.GridFunction(fes_new, gf_old.name)
     if method == "set":
-        with ngs.TaskManager():
+        with parallel():
             gf_new.Set(gf_old)
     elif method == "nodes":
         nodes = LagrangeNodes(fes_new)
@@ -151,5 +152,4 @@ def transfer_phase_field(z_old: ngs.GridFunction, bound_old: ngs.GridFunction,
 def crack_length(z: ngs.GridFunction, epsilon: float) -> float:
     """The Gamma-limit crack length ``1/2 int (eps |grad z|^2 + z^2 / eps) dx``."""
     density = 0.5 * (epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)) + z * z / epsilon)
-    with ngs.TaskManager():
-        return float(ngs.Integrate(density, z.space.mesh))
+    return integrate(density, z.space.mesh)

@@ -1,0 +1,92 @@
+"""Threads that do not change results: NGSolve's TaskManager only where its result is bitwise
+independent of the schedule.
+
+With two or more NGSolve threads, some kernels sum in an order that depends on which thread
+finishes first (measured with ngsolve 6.2.2608; docs/theory.md, "Reproducibility"):
+
+- the ``sparsecholesky`` factorization, whenever NGSolve's thread count is above one, even
+  outside a TaskManager; its triangular solves inside a TaskManager (even repeated solves
+  with one factor differ in the last bits); BDDC, which factorizes inside the assembly;
+- ``Integrate`` (a threaded reduction): differs in the last bit.
+
+Assembly (``BilinearForm.Assemble``, ``LinearForm.Assemble``), ``GridFunction.Set``,
+matrix-vector products and element-wise integrals are bitwise reproducible with threads. So
+ngfrac enters the TaskManager only around those (:func:`parallel`), factorizes and solves with
+one thread (:func:`serial`), and sums integrals element by element (:func:`integrate`). A run
+of a scene then gives the same bits every time with a given thread count.
+``discretization.threaded_solves = true`` runs a whole step inside the TaskManager instead:
+faster on many cores, not reproducible bitwise.
+"""
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager
+from typing import Any, Iterator
+
+import ngsolve as ngs
+
+__all__ = ["integrate", "parallel", "serial"]
+
+
+@contextmanager
+def parallel() -> Iterator[None]:
+    """NGSolve's threads for the enclosed kernels (a no-op inside an active TaskManager).
+
+    Use it only around kernels whose result does not depend on the schedule: assembly,
+    ``GridFunction.Set``, matrix-vector products, element-wise integrals.
+    """
+    with ngs.TaskManager():
+        yield
+
+
+@contextmanager
+def serial() -> Iterator[None]:
+    """One NGSolve thread for the enclosed code (call it outside any TaskManager).
+
+    Sparse factorizations and solves inside it are bitwise reproducible.
+    """
+    with ngs.TaskManager():  # outside one, GetNumThreads() says 1 whatever is configured
+        threads = ngs.GetNumThreads()
+    ngs.SetNumThreads(1)
+    try:
+        yield
+    finally:
+        ngs.SetNumThreads(threads)
+
+
+def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,
+              definedon: Any = None) -> float | list[float]:
+    """``Integrate(cf, mesh)`` with a result that does not depend on the thread count.
+
+    Each component is integrated element by element (threaded, bitwise reproducible) and the
+    element values are summed with :func:`math.fsum` (correctly rounded, order independent).
+
+    Parameters
+    ----------
+    cf : ngsolve.CoefficientFunction
+        A scalar or a vector of ``cf.dim`` components.
+    mesh : ngsolve.Mesh
+    order : int, optional
+        Quadrature order (NGSolve's default when None).
+    vb : ngsolve.VorB
+        ``VOL`` or ``BND``.
+    definedon : ngsolve.Region, optional
+
+    Returns
+    -------
+    float or list of float
+        A float for a scalar ``cf``, else one float per component.
+    """
+    cf = ngs.CoefficientFunction(cf)
+    kwargs: dict[str, Any] = {"element_wise": True}
+    if order is not None:
+        kwargs["order"] = order
+    if definedon is not None:
+        kwargs["definedon"] = definedon
+    components = [cf] if cf.dim == 1 else [cf[i] for i in range(cf.dim)]
+    values = []
+    with parallel():
+        for component in components:
+            per_element = ngs.Integrate(component, mesh, vb, **kwargs)
+            values.append(math.fsum(per_element.NumPy()))
+    return values[0] if cf.dim == 1 else values
