@@ -1,5 +1,6 @@
 """Initial cracks: distance to polylines (2D) or filled planar polygons (3D), the optimal
-profile exp(-d/epsilon), the tip."""
+profile exp(-d/epsilon), the initial tip; the direction of a crack at its tip. The crack set
+of a z field and its tip are in :mod:`ngfrac.crackset`."""
 from __future__ import annotations
 
 from typing import Callable, Sequence
@@ -107,41 +108,6 @@ def initial_tip(crack: Sequence[Sequence[float]],
 def optimal_profile(distance: np.ndarray, epsilon: float) -> np.ndarray:
     """z = exp(-d/epsilon): the 1D minimizer of the surface energy with z = 1 on the crack."""
     return np.exp(-np.asarray(distance) / epsilon)
-
-
-def crack_tip(points: np.ndarray, z_values: np.ndarray,
-              polylines: Sequence[Sequence[Sequence[float]]], band: float,
-              threshold: float = 0.5, start: np.ndarray | None = None) -> np.ndarray:
-    """The crack tip: the point of {z >= threshold} farthest from the initial crack set.
-
-    Points within ``band`` of the initial cracks belong to the initial crack's own band, so
-    while nothing lies beyond it the tip is ``start`` (default: the last point of the first
-    polyline; write crack points from the mouth to the tip). Returns NaNs when nothing is
-    cracked at all. In 3D the initial cracks are polygons (:func:`distance_to_polygons`)
-    and ``start`` is :func:`initial_tip` of the first one.
-
-    Parameters
-    ----------
-    points, z_values : node coordinates (n, d) and node values of z
-    polylines : the initial cracks (2D polylines or 3D polygons)
-    band : float
-        Half width of the initial band, e.g. ``epsilon*ln(1/threshold) + h``.
-    start : (d,) array, optional
-        The tip before the crack grows.
-    """
-    cracked = np.asarray(z_values) >= threshold
-    if not polylines:
-        if not np.any(cracked):
-            return np.full(points.shape[1], np.nan)
-        candidates = points[cracked]
-        return candidates[int(np.argmax(np.linalg.norm(candidates - candidates[0], axis=1)))]
-    first = np.asarray(polylines[0][-1] if start is None else start, dtype=float)
-    if not np.any(cracked):
-        return first
-    candidates = points[cracked]
-    distance = distance_to_cracks(candidates, polylines)
-    farthest = int(np.argmax(distance))
-    return candidates[farthest] if distance[farthest] > band else first
 
 
 def crack_direction(points: np.ndarray, z_values: np.ndarray, tip: np.ndarray, radius: float,

@@ -24,7 +24,8 @@ import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
 from .adaptivity import Adaptation, MeshAdapter
-from .cracks import crack_tip, distance_to_cracks, initial_tip, optimal_profile
+from .cracks import distance_to_cracks, initial_tip, optimal_profile
+from .crackset import CrackSet, NodeGraph, find_crack
 from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
 from .models import make_model
@@ -69,6 +70,10 @@ class StepRecord:
     crack_length: float = math.nan
     tip_x: float = math.nan
     tip_y: float = math.nan
+    path_length: float = math.nan
+    """Geometric length of the crack: the initial cracks plus the grown ridge (2D; NaN in 3D)."""
+    n_damage_zones: int = 0
+    """Components of {z >= 1/2} other than the crack (ngfrac.crackset)."""
     dz_max: float = math.nan
     z_iterations: int = 0
     dt: float = math.nan
@@ -142,6 +147,9 @@ class PhaseFieldStepper:
         self._polylines = [crack.points for crack in scene.cracks]
         self._start_tip = (initial_tip(scene.cracks[0].points, self._on_boundary)
                            if scene.cracks else None)
+        self.nucleus: np.ndarray | None = None
+        """With no initial crack: where z first reached 1/2 (the crack grows from there)."""
+        self._crack_cache: tuple[bytes, CrackSet] | None = None
         gamma = scene.material.gamma
         # A constant toughness stays a number: no coefficient evaluation in the forms.
         self.gamma = gamma.value() if gamma.is_constant else gamma.to_coefficient()
@@ -183,6 +191,8 @@ class PhaseFieldStepper:
         self._fixed_u_dofs = ~np.array(self.fes_u.FreeDofs(), dtype=bool)
         self._boundary_cf = self.model.boundary_values(mesh, sc.loads, self.time)
         self._sizes: np.ndarray | None = None
+        self._node_graph: NodeGraph | None = None
+        self._crack_cache = None
         self.indicators: dict = {}  # reaction-force test functions of this mesh
 
         inv_dt = self.inv_dt
@@ -293,14 +303,29 @@ class PhaseFieldStepper:
             self._set_initial_state()
         self.adapter.remember(self.mesh, self.nodes, self.z_node_values(), self.tip())
 
-    def tip(self) -> np.ndarray:
-        """The current crack tip (see :func:`ngfrac.cracks.crack_tip`)."""
+    def crack(self) -> CrackSet:
+        """The crack set of the current z: tip, ridge, grown length, other damage zones
+        (:func:`ngfrac.crackset.find_crack`)."""
+        values = self.nodes.values(self.z)
+        key = values.tobytes()
+        if self._crack_cache is not None and self._crack_cache[0] == key:
+            return self._crack_cache[1]
         if self._sizes is None:
             self._sizes = element_sizes(self.mesh)
+        if self._node_graph is None:
+            self._node_graph = NodeGraph(self.mesh, self.nodes)
+        eps = self.scene.phase_field.epsilon
         near = self.adapter.sizes.h_band if self.adapter else float(self._sizes.max())
-        band = self.scene.phase_field.epsilon * math.log(2.0) + near
-        return crack_tip(self.nodes.points, self.nodes.values(self.z), self._polylines, band,
-                         start=self._start_tip)
+        if not self._polylines and self.nucleus is None and values.size and values.max() >= 0.5:
+            self.nucleus = self.nodes.points[int(np.argmax(values))].copy()
+        found = find_crack(self._node_graph, values, self._polylines, self._start_tip,
+                           band=eps * math.log(2.0) + near, bin_width=2 * eps, nucleus=self.nucleus)
+        self._crack_cache = (key, found)
+        return found
+
+    def tip(self) -> np.ndarray:
+        """The current crack tip: the end of the crack's ridge (:meth:`crack`)."""
+        return self.crack().tip
 
     def adapt(self, tip: np.ndarray | None = None) -> Adaptation:
         """Change the mesh now and move u and z (with its non-repair bound) onto it."""
@@ -632,12 +657,21 @@ class PhaseFieldStepper:
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
                          order=self.integration_order)
-        tip = self.tip()
+        crack = self.crack()
+        tip = crack.tip
+        path_length = self._initial_length + crack.grown_length if self.mesh.dim == 2 else math.nan
         return StepRecord(**base, forces=dict(self.forces), hmin=float(self._sizes.min()),
                           hmax=float(self._sizes.max()),
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
                           crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
+                          path_length=path_length, n_damage_zones=crack.n_damage_zones,
                           tip_z=float(tip[2]) if len(tip) > 2 else math.nan)
+
+    @property
+    def _initial_length(self) -> float:
+        """Total length of the initial crack polylines (2D)."""
+        return float(sum(np.linalg.norm(np.diff(np.asarray(line, dtype=float), axis=0), axis=1).sum()
+                         for line in self._polylines))
 
     def run(self, history_every: int | None = None) -> Iterator[StepRecord]:
         """Step to the end time, yielding one record per step.

@@ -6,7 +6,7 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.cracks import crack_tip, distance_to_polygons, initial_tip
+from ngfrac.cracks import distance_to_polygons, initial_tip
 from ngfrac.geometry import build_mesh
 from ngfrac.models import Elasticity3D, make_model
 from ngfrac.nodal import LagrangeNodes
@@ -169,9 +169,6 @@ def test_initial_tip_is_the_middle_of_the_crack_front():
     on_boundary = lambda p: abs(p[0]) < 1e-12 or abs(p[2]) < 1e-12 or abs(p[2] - 0.5) < 1e-12
     assert initial_tip(CRACK, on_boundary) == pytest.approx([0.3, 0.5, 0.25])
     assert initial_tip([[0, 0.5], [0.3, 0.5]]) == pytest.approx([0.3, 0.5])
-    points = np.array([[0.3, 0.5, 0.25], [0.6, 0.5, 0.1]])
-    tip = crack_tip(points, np.array([1.0, 0.8]), [CRACK], band=0.05, start=np.array([0.3, 0.5, 0.25]))
-    assert tip == pytest.approx([0.6, 0.5, 0.1])
 
 
 # -- Lagrange nodes on tetrahedra ----------------------------------------------------------------
