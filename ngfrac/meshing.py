@@ -62,7 +62,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .geometry import netgen_geometry
+from .geometry import MeshingError, netgen_geometry
 from .nodal import LagrangeNodes
 from .scene import Geometry
 
@@ -538,7 +538,11 @@ def _generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
     xyz[:, : points.shape[1]] = points[active]
     for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / SIZE_RATIO).tolist()):
         mp.RestrictH(x, y, z, h)
-    return ngeo.GenerateMesh(mp=mp)
+    try:
+        return ngeo.GenerateMesh(mp=mp)
+    except Exception as err:  # netgen raises plain Exceptions
+        raise MeshingError(f"Netgen could not remesh ({err}) with maxh = {maxh:g} and sizes "
+                           f"down to {float(sizes.min()):g}; raise adaptivity.hmin") from None
 
 
 def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray:
