@@ -19,6 +19,9 @@ if TYPE_CHECKING:
     from .expressions import Expression
     from .scene import Geometry, Scene
 
+__all__ = ["ResolutionWarning", "resolution_warnings", "estimated_vertices", "crack_problems",
+           "nonfinite_value", "check_times"]
+
 SAME_POINT = 1e-9
 """Points closer than this times the domain's diameter are the same point."""
 
@@ -39,15 +42,15 @@ def _text(point: np.ndarray) -> str:
 
 def _segment_distance(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray
                       ) -> tuple[float, np.ndarray]:
-    """Distance between segments ab and cd (2D or 3D) and a point of ab nearest to cd."""
-    if a.shape[0] == 2:
-        def cross(u: np.ndarray, v: np.ndarray) -> float:
-            return float(u[0] * v[1] - u[1] * v[0])
-        d1, d2 = cross(b - a, c - a), cross(b - a, d - a)
-        d3, d4 = cross(d - c, a - c), cross(d - c, b - c)
-        if d1 * d2 < 0 and d3 * d4 < 0:  # a proper crossing
-            s = d3 / (d3 - d4)
-            return 0.0, a + s * (b - a)
+    """Distance between 2D segments ab and cd, and a point where they come that close."""
+    def cross(u: np.ndarray, v: np.ndarray) -> float:
+        return float(u[0] * v[1] - u[1] * v[0])
+
+    d1, d2 = cross(b - a, c - a), cross(b - a, d - a)
+    d3, d4 = cross(d - c, a - c), cross(d - c, b - c)
+    if d1 * d2 < 0 and d3 * d4 < 0:  # a proper crossing
+        s = d3 / (d3 - d4)
+        return 0.0, a + s * (b - a)
     candidates = [(_point_segment(a, c, d), a), (_point_segment(b, c, d), b),
                   (_point_segment(c, a, b), c), (_point_segment(d, a, b), d)]
     return min(candidates, key=lambda item: item[0])

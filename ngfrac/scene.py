@@ -613,8 +613,12 @@ LISTS: dict[str, type] = {"cracks": Crack, "loads": Load}
 
 @dataclass(frozen=True)
 class Scene:
-    """A complete, validated run description. Build it with :func:`load_scene` or
-    :meth:`Scene.from_dict`."""
+    """A complete, validated run description. Build it with :func:`load_scene`,
+    :meth:`Scene.from_dict` or in code: sections may be given as dicts of their keys, loads and
+    cracks as lists, and every section coerces plain numbers, strings and lists. Validation
+    also refuses crack geometry Netgen cannot mesh (:func:`ngfrac.checks.crack_problems`) and
+    expressions that are NaN or infinite on their boundary or domain for 0 <= t <= t_end.
+    ``dataclasses.replace`` returns a new scene, validated again."""
 
     name: str
     geometry: Geometry
