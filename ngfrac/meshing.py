@@ -491,7 +491,7 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
     optimize_steps : int
         Netgen's ``optsteps2d``; 1 halves the time of the default 3 at nearly equal quality.
     max_attempts : int
-        Generations before giving up with a ``RuntimeError``.
+        Generations before giving up with a :class:`~ngfrac.geometry.MeshingError`.
     density : VertexDensity, optional
         The run's learned vertex-count constant: used for the prediction and updated with the
         mesh made. Without it every call starts from :data:`VERTEX_DENSITY`.
@@ -526,7 +526,7 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
         if nv <= max_vertices:
             return ngs.Mesh(ngmesh)
         margin *= 0.95
-    raise RuntimeError(f"remesh: no mesh with <= {max_vertices} vertices after {max_attempts} "
+    raise MeshingError(f"remesh: no mesh with <= {max_vertices} vertices after {max_attempts} "
                        f"attempts (last had {nv}); raise max_vertices or hmax")
 
 

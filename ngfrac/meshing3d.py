@@ -90,14 +90,27 @@ def occ_geometry(geometry: Geometry, cracks: Sequence[Sequence[Sequence[float]]]
         faces.name = name
     if not cracks:
         return occ.OCCGeometry(box)
+    tol = 1e-10 * max(geometry.extent)
+    for polygon in cracks:  # OCC segfaults on an edge from a point to itself
+        corners = np.asarray(polygon, dtype=float)
+        gaps = np.linalg.norm(corners - np.roll(corners, -1, axis=0), axis=1)
+        if np.any(gaps <= tol):
+            k = int(np.argmin(gaps))
+            raise MeshingError(f"a crack polygon has a zero-length edge at corner {k} "
+                               f"{corners[k].tolist()}; remove the repeated corner (ngfrac check "
+                               "finds it)")
     faces = []
-    for polygon in cracks:
-        corners = [occ.Pnt(*map(float, p)) for p in polygon]
-        wire = occ.Wire([occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])])
-        face = occ.Face(wire)
-        face.name = CRACK_FACE
-        faces.append(face)
-    return occ.OCCGeometry(occ.Glue([box, *faces]))
+    try:
+        for polygon in cracks:
+            corners = [occ.Pnt(*map(float, p)) for p in polygon]
+            wire = occ.Wire([occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])])
+            face = occ.Face(wire)
+            face.name = CRACK_FACE
+            faces.append(face)
+        return occ.OCCGeometry(occ.Glue([box, *faces]))
+    except Exception as err:  # OCC raises plain Exceptions for degenerate wires and faces
+        raise MeshingError(f"OCC could not glue the crack polygons into the box ({err}); run "
+                           "ngfrac check on the scene") from None
 
 
 def build_mesh_3d(geometry: Geometry, maxh: float,
