@@ -111,6 +111,8 @@ def build_mesh(geometry: Geometry, maxh: float,
         return build_mesh_3d(geometry, maxh, cracks)
     try:
         ngmesh = netgen_geometry(geometry, cracks).GenerateMesh(maxh=maxh)
+    except MeshingError:
+        raise
     except Exception as err:  # netgen raises plain Exceptions for bad geometries
         raise MeshingError(f"Netgen could not mesh the rectangle with its cracks ({err}) at "
                            f"maxh = {maxh:g}; run ngfrac check on the scene, or change the "

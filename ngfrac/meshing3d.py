@@ -118,6 +118,8 @@ def build_mesh_3d(geometry: Geometry, maxh: float,
     """A quasi-uniform tetrahedral mesh of a box, with faces on the crack polygons."""
     try:
         ngmesh = occ_geometry(geometry, cracks).GenerateMesh(maxh=maxh)
+    except MeshingError:
+        raise
     except Exception as err:  # netgen raises plain Exceptions for bad geometries
         raise MeshingError(f"Netgen could not mesh the box with its cracks ({err}) at maxh = "
                            f"{maxh:g}; run ngfrac check on the scene, or change the crack "
