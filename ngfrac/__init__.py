@@ -19,13 +19,16 @@ import os as _os
 
 import ngsolve as _ngs
 
+from .checks import ResolutionWarning, resolution_warnings
 from .expressions import Expression, ExpressionError
+from .geometry import MeshingError
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene
 from .stepper import PhaseFieldStepper, SolverError, StepRecord
 
-__all__ = ["Expression", "ExpressionError", "PhaseFieldStepper", "RunSummary", "Scene",
-           "SceneError", "SolverError", "StepRecord", "load_scene", "run_scene"]
+__all__ = ["Expression", "ExpressionError", "MeshingError", "PhaseFieldStepper", "ResolutionWarning",
+           "RunSummary", "Scene", "SceneError", "SolverError", "StepRecord", "load_scene",
+           "resolution_warnings", "run_scene"]
 __version__ = "0.1.0"
 
 

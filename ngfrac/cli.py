@@ -1,23 +1,33 @@
 """Command line: ``ngfrac run SCENE.toml --out DIR``, ``ngfrac run --restart DIR``,
 ``ngfrac plot DIR`` and ``ngfrac check SCENE.toml``.
 
-Bad input exits with status 2 and one line on stderr; no traceback.
+Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
+(:func:`ngfrac.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
+them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
 """
 from __future__ import annotations
 
 import argparse
 import logging
 import sys
+import warnings
 from pathlib import Path
 
 from .checkpoint import CheckpointError
+from .checks import ResolutionWarning, resolution_warnings
+from .geometry import MeshingError
 from .output import OutputError
 from .results import ResultsError
-from .scene import SceneError, load_scene
+from .scene import Scene, SceneError, load_scene
 from .stepper import SolverError
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
+STRICT_HELP = "treat resolution warnings as errors (exit 2)"
+
+
+class _Strict(Exception):
+    """--strict and the scene has resolution warnings (already printed)."""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -35,6 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--no-plots", action="store_true", help="skip history.png and crack.png")
     run.add_argument("--profile", action="store_true", help="print the wall time of each phase at the end")
+    run.add_argument("--strict", action="store_true", help=STRICT_HELP)
     run.add_argument("-v", "--verbose", action="store_true", help="log at INFO level")
     plot = sub.add_parser("plot", help="write the figures of a run folder into DIR/plots")
     plot.add_argument("folder", help="a run folder written by ngfrac run")
@@ -43,12 +54,23 @@ def _parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a scene file and exit")
     check.add_argument("scene")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    check.add_argument("--strict", action="store_true", help=STRICT_HELP)
     return parser
 
 
 def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     print(f"ngfrac: error: {message}", file=sys.stderr)
     return code
+
+
+def _warn_resolution(scene: Scene, strict: bool) -> None:
+    """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2)."""
+    found = resolution_warnings(scene)
+    for message in found:
+        print(f"ngfrac: warning: {message}", file=sys.stderr)
+    if strict and found:
+        raise _Strict(f"--strict: {len(found)} resolution warning(s) above; fix the scene or "
+                      "drop --strict")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -68,6 +90,7 @@ def _run(args: argparse.Namespace) -> int:
             raise SceneError("--out DIR is required: the folder the run writes into")
         scene = load_scene(args.scene, args.overrides)
         out = Path(args.out)
+    _warn_resolution(scene, args.strict)
     dt = scene.time.dt
     bar = tqdm(total=scene.time.n_ticks, unit="dt", disable=args.no_progress,
                desc=scene.name, dynamic_ncols=True)
@@ -80,9 +103,11 @@ def _run(args: argparse.Namespace) -> int:
         bar.update(round(record.t / dt) - bar.n)
 
     try:
-        summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
-                            plots=not args.no_plots, restart=bool(args.restart),
-                            on_start=lambda stepper: bar.update(stepper.ticks))
+        with warnings.catch_warnings():  # printed above, once
+            warnings.simplefilter("ignore", ResolutionWarning)
+            summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
+                                plots=not args.no_plots, restart=bool(args.restart),
+                                on_start=lambda stepper: bar.update(stepper.ticks))
     finally:
         bar.close()
     last = summary.last
@@ -108,13 +133,14 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.command == "check":
             scene = load_scene(args.scene, args.overrides)
+            _warn_resolution(scene, args.strict)
             print(f"{args.scene}: scene {scene.name!r} is valid ({scene.time.n_steps} steps, "
                   f"model {scene.model.kind})")
             return 0
         return _run(args)
-    except (SceneError, OutputError, CheckpointError, ResultsError) as err:
+    except (SceneError, OutputError, CheckpointError, ResultsError, _Strict) as err:
         return _fail(str(err))
-    except SolverError as err:
+    except (SolverError, MeshingError) as err:
         return _fail(str(err), EXIT_SOLVER)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)

@@ -97,14 +97,14 @@ class Expression:
 
     def evaluate_numpy(self, variables: Mapping[str, Any]) -> Any:
         """Evaluate with numpy arrays (or floats) for the variables it uses."""
-        env = dict(CONSTANTS)
+        env: dict[str, Any] = {k: np.float64(v) for k, v in CONSTANTS.items()}
         env.update(_numpy_functions())
         env.update(variables)
         missing = (self.names & set(VARIABLES)) - set(variables)
         if missing:
             raise ExpressionError(f"expression {self.text!r} needs {sorted(missing)}")
-        with np.errstate(all="ignore"):
-            return _evaluate(self._tree.body, env)
+        with np.errstate(all="ignore"):  # numpy floats: 1/0 is inf and 10**400 inf, not errors
+            return _evaluate(self._tree.body, env, literal=np.float64)
 
     def to_coefficient(self, t: Any = None) -> Any:
         """Build an NGSolve CoefficientFunction.
@@ -161,16 +161,17 @@ def _check(node: ast.AST, text: str) -> set[str]:
                           "(use numbers, x, y, z, t, pi, + - * / ** and functions)")
 
 
-def _evaluate(node: ast.AST, env: Mapping[str, Any]) -> Any:
+def _evaluate(node: ast.AST, env: Mapping[str, Any], literal: Callable[[Any], Any] = float) -> Any:
     if isinstance(node, ast.Constant):
-        return float(node.value)
+        return literal(node.value)
     if isinstance(node, ast.Name):
         return env[node.id]
     if isinstance(node, ast.BinOp):
-        return _BINARY[type(node.op)](_evaluate(node.left, env), _evaluate(node.right, env))
+        return _BINARY[type(node.op)](_evaluate(node.left, env, literal),
+                                      _evaluate(node.right, env, literal))
     if isinstance(node, ast.UnaryOp):
-        return _UNARY[type(node.op)](_evaluate(node.operand, env))
+        return _UNARY[type(node.op)](_evaluate(node.operand, env, literal))
     if isinstance(node, ast.Call):
         func = env[node.func.id]  # type: ignore[attr-defined]
-        return func(*(_evaluate(arg, env) for arg in node.args))
+        return func(*(_evaluate(arg, env, literal) for arg in node.args))
     raise ExpressionError(f"cannot evaluate {ast.dump(node)}")  # unreachable after _check

@@ -18,6 +18,14 @@ CRACK_BOUNDARY = "crack"
 """Name of the interior mesh edges that follow the initial cracks."""
 
 
+class MeshingError(RuntimeError):
+    """Netgen could not mesh the domain (with its cracks), or no mesh meets the vertex cap.
+
+    The message is one line that says what failed and what to change; the CLI prints it
+    (exit 3) instead of Netgen's traceback.
+    """
+
+
 def _sides(geometry: Geometry) -> list[tuple[str, tuple[float, float], tuple[float, float]]]:
     x0, y0 = geometry.origin
     x1, y1 = x0 + geometry.width, y0 + geometry.height
@@ -63,6 +71,9 @@ def netgen_geometry(geometry: Geometry,
                 geo.Append(["line", point(p), point(q)], leftdomain=1, rightdomain=0, bc=name)
     for line in cracks:
         for p, q in zip(line[:-1], line[1:]):
+            if point(p) == point(q):  # Netgen segfaults on a line from a point to itself
+                raise MeshingError(f"a crack segment from {list(p)} to {list(q)} has zero length; "
+                                   "remove the repeated point (ngfrac check finds it)")
             middle = (0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]))
             if _on_boundary(geometry, middle, tol):
                 continue  # in a rectangle only a segment along a side has its middle on the boundary
@@ -100,7 +111,10 @@ def build_mesh(geometry: Geometry, maxh: float,
         return build_mesh_3d(geometry, maxh, cracks)
     try:
         ngmesh = netgen_geometry(geometry, cracks).GenerateMesh(maxh=maxh)
+    except MeshingError:
+        raise
     except Exception as err:  # netgen raises plain Exceptions for bad geometries
-        raise ValueError(f"Netgen could not mesh the geometry with its cracks ({err}); "
-                         "check that the cracks do not cross each other") from None
+        raise MeshingError(f"Netgen could not mesh the rectangle with its cracks ({err}) at "
+                           f"maxh = {maxh:g}; run ngfrac check on the scene, or change the "
+                           "cracks or the mesh size") from None
     return ngs.Mesh(ngmesh)

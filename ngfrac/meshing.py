@@ -62,7 +62,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .geometry import netgen_geometry
+from .geometry import MeshingError, netgen_geometry
 from .nodal import LagrangeNodes
 from .scene import Geometry
 
@@ -491,7 +491,7 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
     optimize_steps : int
         Netgen's ``optsteps2d``; 1 halves the time of the default 3 at nearly equal quality.
     max_attempts : int
-        Generations before giving up with a ``RuntimeError``.
+        Generations before giving up with a :class:`~ngfrac.geometry.MeshingError`.
     density : VertexDensity, optional
         The run's learned vertex-count constant: used for the prediction and updated with the
         mesh made. Without it every call starts from :data:`VERTEX_DENSITY`.
@@ -526,7 +526,7 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
         if nv <= max_vertices:
             return ngs.Mesh(ngmesh)
         margin *= 0.95
-    raise RuntimeError(f"remesh: no mesh with <= {max_vertices} vertices after {max_attempts} "
+    raise MeshingError(f"remesh: no mesh with <= {max_vertices} vertices after {max_attempts} "
                        f"attempts (last had {nv}); raise max_vertices or hmax")
 
 
@@ -538,7 +538,11 @@ def _generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
     xyz[:, : points.shape[1]] = points[active]
     for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / SIZE_RATIO).tolist()):
         mp.RestrictH(x, y, z, h)
-    return ngeo.GenerateMesh(mp=mp)
+    try:
+        return ngeo.GenerateMesh(mp=mp)
+    except Exception as err:  # netgen raises plain Exceptions
+        raise MeshingError(f"Netgen could not remesh ({err}) with maxh = {maxh:g} and sizes "
+                           f"down to {float(sizes.min()):g}; raise adaptivity.hmin") from None
 
 
 def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray:

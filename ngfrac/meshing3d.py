@@ -39,6 +39,7 @@ import numpy as np
 import ngsolve as ngs
 import netgen.meshing as ngm
 
+from .geometry import MeshingError
 from .meshing import (NETGEN_GRADING, ElementGeometry, VertexDensity, _sample, cap_vertices,
                       element_grader, predict_vertices)
 from .scene import Geometry
@@ -89,14 +90,27 @@ def occ_geometry(geometry: Geometry, cracks: Sequence[Sequence[Sequence[float]]]
         faces.name = name
     if not cracks:
         return occ.OCCGeometry(box)
+    tol = 1e-10 * max(geometry.extent)
+    for polygon in cracks:  # OCC segfaults on an edge from a point to itself
+        corners = np.asarray(polygon, dtype=float)
+        gaps = np.linalg.norm(corners - np.roll(corners, -1, axis=0), axis=1)
+        if np.any(gaps <= tol):
+            k = int(np.argmin(gaps))
+            raise MeshingError(f"a crack polygon has a zero-length edge at corner {k} "
+                               f"{corners[k].tolist()}; remove the repeated corner (ngfrac check "
+                               "finds it)")
     faces = []
-    for polygon in cracks:
-        corners = [occ.Pnt(*map(float, p)) for p in polygon]
-        wire = occ.Wire([occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])])
-        face = occ.Face(wire)
-        face.name = CRACK_FACE
-        faces.append(face)
-    return occ.OCCGeometry(occ.Glue([box, *faces]))
+    try:
+        for polygon in cracks:
+            corners = [occ.Pnt(*map(float, p)) for p in polygon]
+            wire = occ.Wire([occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])])
+            face = occ.Face(wire)
+            face.name = CRACK_FACE
+            faces.append(face)
+        return occ.OCCGeometry(occ.Glue([box, *faces]))
+    except Exception as err:  # OCC raises plain Exceptions for degenerate wires and faces
+        raise MeshingError(f"OCC could not glue the crack polygons into the box ({err}); run "
+                           "ngfrac check on the scene") from None
 
 
 def build_mesh_3d(geometry: Geometry, maxh: float,
@@ -104,9 +118,12 @@ def build_mesh_3d(geometry: Geometry, maxh: float,
     """A quasi-uniform tetrahedral mesh of a box, with faces on the crack polygons."""
     try:
         ngmesh = occ_geometry(geometry, cracks).GenerateMesh(maxh=maxh)
+    except MeshingError:
+        raise
     except Exception as err:  # netgen raises plain Exceptions for bad geometries
-        raise ValueError(f"Netgen could not mesh the box with its cracks ({err}); check that the "
-                         "crack polygons do not cross each other") from None
+        raise MeshingError(f"Netgen could not mesh the box with its cracks ({err}) at maxh = "
+                           f"{maxh:g}; run ngfrac check on the scene, or change the crack "
+                           "polygons or the mesh size") from None
     return ngs.Mesh(ngmesh)
 
 
@@ -118,7 +135,11 @@ def generate_3d(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float
     active = sizes < maxh
     for (x, y, z), h in zip(points[active].tolist(), (sizes[active] / size_ratio).tolist()):
         mp.RestrictH(x, y, z, h)
-    return ngeo.GenerateMesh(mp=mp)
+    try:
+        return ngeo.GenerateMesh(mp=mp)
+    except Exception as err:  # netgen raises plain Exceptions
+        raise MeshingError(f"Netgen could not remesh the box ({err}) with maxh = {maxh:g} and "
+                           f"sizes down to {float(sizes.min()):g}; raise adaptivity.hmin") from None
 
 
 def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
@@ -152,7 +173,7 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
         The constant c learned from the previous meshes of the run (pass one instance to every
         call, as in 2D); until it has measured a 3D mesh, :data:`VERTEX_DENSITY_3D` is used.
     max_attempts : int
-        Generations before giving up with a ``RuntimeError``.
+        Generations before giving up with a :class:`~ngfrac.geometry.MeshingError`.
     """
     density = density if density is not None else VertexDensity()
     geom = ElementGeometry.of(mesh)
@@ -178,5 +199,5 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
             return ngs.Mesh(ngmesh)
         c = density.value
         margin *= 0.95
-    raise RuntimeError(f"remesh: no 3D mesh with <= {max_vertices} vertices after {max_attempts} "
+    raise MeshingError(f"remesh: no 3D mesh with <= {max_vertices} vertices after {max_attempts} "
                        f"attempts (last had {nv}); raise max_vertices or hmax")

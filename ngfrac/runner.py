@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import logging
 import time
+import warnings
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 from .checkpoint import resume, save_checkpoint
+from .checks import ResolutionWarning, resolution_warnings
 from .output import (HistoryWriter, OutputError, VTKSeries, atomic_write_text, prepare_output_dir,
                      to_toml)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -91,7 +93,15 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     on_step : called with the stepper after set-up and after every step (for checks in tests)
     restart : continue the run in ``out_dir`` from its checkpoint
     on_start : called once with the stepper before the first step (e.g. to place a progress bar)
+
+    Warns
+    -----
+    ResolutionWarning
+        One per line of :func:`ngfrac.checks.resolution_warnings` (the mesh or epsilon
+        cannot resolve the crack), before anything is written.
     """
+    for message in resolution_warnings(scene):
+        warnings.warn(message, ResolutionWarning, stacklevel=2)
     started = time.perf_counter()
     out = Path(out_dir)
     stepper = _start(scene, out, overwrite, restart)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -20,6 +21,7 @@ from typing import Any, ClassVar, Mapping, get_type_hints
 
 import numpy as np
 
+from .checks import check_times, crack_problems, nonfinite_value
 from .expressions import Expression, ExpressionError
 
 MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
@@ -52,14 +54,22 @@ def _require(condition: bool, section: str, name: str, value: Any, allowed: str)
 
 
 class _Section:
-    """Base of the scene sections: required keys first, then each section's own checks."""
+    """Base of the scene sections: required keys first, plain Python values coerced into the
+    field types (``Material(gamma=1.0)``, a load value ``"10*t"`` or ``["0", "t"]``), then each
+    section's own checks. The sections are frozen, so :func:`dataclasses.replace` makes a
+    new, validated one."""
 
     SECTION: ClassVar[str] = ""
 
     def __post_init__(self) -> None:
+        hints = _hints(type(self))
         for f in dataclasses.fields(self):  # type: ignore[arg-type]
-            if getattr(self, f.name) is REQUIRED:
+            value = getattr(self, f.name)
+            if value is REQUIRED:
                 raise SceneError(f"missing key {_key(self.SECTION, f.name)!r}; it is required")
+            coerced = _coerce(value, hints[f.name], _key(self.SECTION, f.name), f.default)
+            if coerced is not value:
+                object.__setattr__(self, f.name, coerced)
         self.validate()
 
     def validate(self) -> None:
@@ -323,6 +333,34 @@ class Geometry(_Section):
     def boundary_names(self) -> tuple[str, ...]:
         return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
 
+    @property
+    def face_names(self) -> tuple[tuple[str, str], ...]:
+        """Per axis, the names of the boundary at its low and its high end."""
+        if self.dim == 3:
+            return (("left", "right"), ("bottom", "top"), ("back", "front"))
+        return (("left", "right"), ("bottom", "top"))
+
+    def on_boundary(self, point: Any, tol: float | None = None) -> bool:
+        """Whether a point of the closed domain lies on its boundary (within ``tol``; default
+        1e-9 of the diagonal)."""
+        tol = 1e-9 * math.hypot(*self.extent) if tol is None else tol
+        return any(abs(p - o) <= tol or abs(p - o - e) <= tol
+                   for p, o, e in zip(point, self.origin, self.extent))
+
+    def boundary_points(self, name: str, n: int = 0) -> tuple[np.ndarray, ...]:
+        """A regular grid on one named boundary, for checking load expressions: n points
+        per edge (0: 201 on a side of a rectangle, 41 x 41 on a face of a box)."""
+        n = n or (201 if self.dim == 2 else 41)
+        for axis, names in enumerate(self.face_names):
+            if name in names:
+                break
+        else:
+            raise ValueError(f"{name!r} is not a boundary of the geometry")
+        axes = [np.linspace(o, o + e, n) for o, e in zip(self.origin, self.extent)]
+        o, e = self.origin[axis], self.extent[axis]
+        axes[axis] = np.array([o if name == names[0] else o + e])
+        return tuple(a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
+
     def contains(self, point: tuple[float, ...], tol: float = 1e-12) -> bool:
         """Whether a point (of the domain's dimension) lies in the closed rectangle or box."""
         if len(point) != self.dim:
@@ -578,8 +616,12 @@ LISTS: dict[str, type] = {"cracks": Crack, "loads": Load}
 
 @dataclass(frozen=True)
 class Scene:
-    """A complete, validated run description. Build it with :func:`load_scene` or
-    :meth:`Scene.from_dict`."""
+    """A complete, validated run description. Build it with :func:`load_scene`,
+    :meth:`Scene.from_dict` or in code: sections may be given as dicts of their keys, loads and
+    cracks as lists, and every section coerces plain numbers, strings and lists. Validation
+    also refuses crack geometry Netgen cannot mesh (:func:`ngfrac.checks.crack_problems`) and
+    expressions that are NaN or infinite on their boundary or domain for 0 <= t <= t_end.
+    ``dataclasses.replace`` returns a new scene, validated again."""
 
     name: str
     geometry: Geometry
@@ -594,6 +636,7 @@ class Scene:
     adaptivity: Adaptivity = field(default_factory=Adaptivity)
 
     def __post_init__(self) -> None:
+        self._coerce_sections()
         names = self.geometry.boundary_names
         self._check_dimension()
         if not self.loads:
@@ -625,7 +668,57 @@ class Scene:
                 if not self.geometry.contains(point):
                     raise SceneError(f"cracks[{i}].points: point {list(point)} lies outside the "
                                      f"domain {self._domain_text()}")
+        normals = [c.normal for c in self.cracks] if self.geometry.dim == 3 else []
+        for problem in crack_problems(self.geometry, [c.points for c in self.cracks], normals):
+            raise SceneError(problem)
         self._check_gamma_positive()
+        self._check_finite_expressions()
+
+    def _coerce_sections(self) -> None:
+        """Sections given as tables (dicts) are built; lists of loads and cracks become tuples."""
+        if not isinstance(self.name, str):
+            raise SceneError(f"name = {self.name!r} must be a string")
+        for section, cls in SECTIONS.items():
+            value = getattr(self, section)
+            if isinstance(value, Mapping):
+                object.__setattr__(self, section, _build(cls, value, section))
+            elif not isinstance(value, cls):
+                raise SceneError(f"{section} = {value!r} must be a {cls.__name__} (or a table of "
+                                 "its keys)")
+        for section, cls in LISTS.items():
+            items = getattr(self, section)
+            if isinstance(items, (cls, Mapping, str)) or not isinstance(items, (list, tuple)):
+                raise SceneError(f"{section} = {items!r} must be a list of {cls.__name__}")
+            built = []
+            for i, item in enumerate(items):
+                if isinstance(item, Mapping):
+                    item = _build(cls, item, f"{section}[{i}]")
+                elif not isinstance(item, cls):
+                    raise SceneError(f"{section}[{i}] = {item!r} must be a {cls.__name__} (or a "
+                                     "table of its keys)")
+                built.append(item)
+            if not isinstance(items, tuple) or any(a is not b for a, b in zip(built, items)):
+                object.__setattr__(self, section, tuple(built))
+
+    def _check_finite_expressions(self) -> None:
+        """Loads on their boundary, the body force in the domain, at a few times in [0, t_end]."""
+        times = check_times(self.time.n_ticks * self.time.dt)
+        checks = []
+        for i, load in enumerate(self.loads):
+            where = self.geometry.boundary_points(load.boundary)
+            checks.append((f"loads[{i}].value", load.value, where, f"on boundary {load.boundary!r}"))
+        checks.append(("material.body_force", self.material.body_force,
+                       self.geometry.sample_points(), "in the domain"))
+        for key, value, where, place in checks:
+            parts = value if isinstance(value, Components) else (value,)
+            for k, part in enumerate(parts):
+                if not isinstance(part, Expression):
+                    continue  # "free"
+                bad = nonfinite_value(part, where, times)
+                if bad:
+                    name = f"{key}[{k}]" if isinstance(value, Components) else key
+                    raise SceneError(f"{name} = {part.text!r} is {bad} {place}: an expression must "
+                                     f"be finite for 0 <= t <= t_end")
 
     def _check_dimension(self) -> None:
         """A 3D model needs a box, a box needs a 3D model."""
@@ -656,8 +749,10 @@ class Scene:
         names = "xyz"[:dim]
         values = np.broadcast_to(gamma.evaluate_numpy(dict(zip(names, coordinates))),
                                  coordinates[0].shape)
-        if not np.all(np.isfinite(values)):
-            raise SceneError(f"material.gamma = {gamma.text!r} is not finite everywhere in the domain")
+        bad = nonfinite_value(gamma, coordinates)
+        if bad:
+            raise SceneError(f"material.gamma = {gamma.text!r} is {bad} in the domain: the "
+                             "toughness must be finite and > 0 everywhere")
         worst = int(np.argmin(values))
         if values[worst] <= 0:
             where = ", ".join(f"{c[worst]:.3g}" for c in coordinates)
@@ -741,10 +836,59 @@ def _build(cls: type, data: Any, section: str) -> Any:
             raise SceneError(f"missing key {_key(section, name)!r}; it is required")
     try:
         return cls(**kwargs)
-    except SceneError:
+    except SceneError as err:
+        prefix = getattr(cls, "SECTION", "") + "."
+        message = str(err)
+        if section + "." != prefix and message.startswith(prefix):  # name the list entry
+            raise SceneError(section + "." + message[len(prefix):]) from None
         raise
     except (TypeError, ValueError) as err:
         raise SceneError(f"[{section}]: {err}") from None
+
+
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    return get_type_hints(cls)
+
+
+def _has_type(value: Any, hint: Any, default: Any) -> bool:
+    """Whether a field value is already of its field's type (then it is kept as it is)."""
+    def number(v: Any) -> bool:
+        return isinstance(v, float) and math.isfinite(v)
+
+    if hint is float:
+        return number(value) or (isinstance(default, float) and math.isnan(default)
+                                 and isinstance(value, float) and math.isnan(value))
+    if hint in (int, bool, str):
+        return type(value) is hint
+    if hint is Expression:
+        return isinstance(value, Expression)
+    if hint == Expression | Components:
+        return isinstance(value, (Expression, Components))
+    if hint == tuple[float, ...]:
+        return isinstance(value, tuple) and all(number(v) for v in value)
+    if hint == tuple[tuple[float, ...], ...]:
+        return isinstance(value, tuple) and all(
+            isinstance(p, tuple) and all(number(v) for v in p) for p in value)
+    return False
+
+
+def _plain(value: Any) -> Any:
+    """Tuples and numpy values as the lists and Python scalars TOML gives."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _coerce(value: Any, hint: Any, key: str, default: Any) -> Any:
+    """A field value given in code (a number, a string, a list) as its field's type."""
+    if _has_type(value, hint, default):
+        return value
+    return _convert(_plain(value), hint, key)
 
 
 def _convert(value: Any, hint: Any, key: str) -> Any:

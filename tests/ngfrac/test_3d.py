@@ -100,7 +100,7 @@ def test_3d_loads_need_three_components():
 
 @pytest.mark.parametrize("points, words", [
     ([[0.0, 0.5], [0.3, 0.5]], ["cracks[0].points", "2D points", "[[x, y, z], ...]"]),
-    ([[0.0, 0.5, 0.0], [0.3, 0.5, 0.0]], ["cracks.points", "at least three corners"]),
+    ([[0.0, 0.5, 0.0], [0.3, 0.5, 0.0]], ["cracks[0].points", "at least three corners"]),
     ([[0.0, 0.5, 0.0], [0.3, 0.5, 0.0], [0.3, 0.6, 0.5], [0.0, 0.5, 0.5]], ["planar"]),
     ([[0.0, 0.5, 0.0], [0.3, 0.5, 0.0], [0.6, 0.5, 0.0]], ["no area"]),
     ([[0.0, 0.5, 0.0], [0.3, 0.5, 0.0], [0.3, 0.5, 0.9], [0.0, 0.5, 0.9]], ["outside the domain"]),

@@ -1,9 +1,16 @@
 """The command line: exit codes, one-line errors without traceback, outputs."""
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from ngfrac import cli
+from ngfrac import stepper as stepper_module
+from ngfrac.geometry import build_mesh
+
+from bad_inputs import ALL_CASES, bad_scene_file
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIT = str(ROOT / "demos" / "mode3_slit.toml")
@@ -93,3 +100,95 @@ def test_plot_command(tmp_path):
     assert result.returncode == 0, result.stderr
     assert (out / "plots" / "history.png").exists()
     assert list((out / "plots").glob("z_t*.png"))
+
+
+# -- bad input is refused before anything is written --------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def earlier_run(tmp_path_factory):
+    """A finished run folder, with a file of the user's in it."""
+    out = tmp_path_factory.mktemp("earlier") / "run"
+    result = ngfrac("run", SLIT, "--out", str(out), *QUICK, "--no-plots")
+    assert result.returncode == 0, result.stderr
+    (out / "my_notes.txt").write_text("mine")
+    return out
+
+
+def snapshot(folder):
+    return {str(p.relative_to(folder)): (p.stat().st_mtime_ns, p.read_bytes())
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def one_error_line(err, match):
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("ngfrac: error: ")
+    assert re.search(match, lines[0]), lines[0]
+
+
+@pytest.mark.parametrize("case", ALL_CASES)
+def test_bad_input_is_refused_by_check_and_by_run_into_an_earlier_run(case, earlier_run, tmp_path,
+                                                                      capfd):
+    path, match = bad_scene_file(case, tmp_path)
+    before = snapshot(earlier_run)
+    assert cli.main(["check", str(path)]) == 2
+    one_error_line(capfd.readouterr().err, match)
+    for flags in ([], ["--overwrite"]):
+        assert cli.main(["run", str(path), "--out", str(earlier_run), "--no-progress", *flags]) == 2
+        one_error_line(capfd.readouterr().err, match)
+        assert snapshot(earlier_run) == before, flags
+
+
+def test_repeated_crack_point_no_longer_segfaults(earlier_run, tmp_path):
+    """It was exit 139 and no message (Netgen, a line from a point to itself)."""
+    before = snapshot(earlier_run)
+    result = ngfrac("run", SLIT, "--out", str(earlier_run), "--overwrite", *QUICK,
+                    "--set", "cracks.0.points=[[0.0, 0.5], [0.3, 0.5], [0.3, 0.5]]")
+    assert result.returncode == 2
+    one_error_line(result.stderr, r"cracks\[0\]: point 2 repeats point 1 \(0.3, 0.5\)")
+    assert snapshot(earlier_run) == before
+
+
+def test_meshing_failure_during_the_run_exits_3_in_one_line(tmp_path, monkeypatch, capfd):
+    """A Netgen failure (here forced: a crack that runs back, behind the scene's checks) is a
+    MeshingError: one line, exit 3."""
+    def failing(geometry, maxh, cracks):
+        return build_mesh(geometry, maxh, [[[0.0, 0.5], [0.3, 0.5], [0.1, 0.5]]])
+
+    monkeypatch.setattr(stepper_module, "build_mesh", failing)
+    code = cli.main(["run", SLIT, "--out", str(tmp_path / "run"), *QUICK, "--no-plots",
+                     "--set", "adaptivity.enabled=false"])
+    assert code == 3
+    one_error_line(capfd.readouterr().err, r"Netgen could not mesh the rectangle .*; run ngfrac check")
+
+
+# -- resolution warnings ------------------------------------------------------------------------
+
+CAP_100 = ["--set", "adaptivity.max_vertices=100"]
+WARNING_100 = "ngfrac: warning: adaptivity.max_vertices = 100 is below the ~"
+
+
+def test_check_warns_in_one_line_and_strict_exits_2(capfd):
+    assert cli.main(["check", SLIT, *CAP_100]) == 0
+    captured = capfd.readouterr()
+    assert captured.err.strip().splitlines() == [captured.err.strip()]
+    assert captured.err.startswith(WARNING_100) and "is valid" in captured.out
+    assert cli.main(["check", SLIT, *CAP_100, "--strict"]) == 2
+    lines = capfd.readouterr().err.strip().splitlines()
+    assert lines[0].startswith(WARNING_100)
+    assert lines[1] == "ngfrac: error: --strict: 1 resolution warning(s) above; fix the scene or drop --strict"
+    assert cli.main(["check", SLIT, "--strict"]) == 0  # the demo resolves its crack
+
+
+def test_run_warns_once_and_strict_writes_nothing(tmp_path, capfd):
+    coarse = [*QUICK, "--set", "geometry.mesh_size=0.05", "--set", "adaptivity.enabled=false",
+              "--no-plots"]  # above epsilon/2 = 0.04
+    assert cli.main(["run", SLIT, "--out", str(tmp_path / "strict"), *coarse, "--strict"]) == 2
+    assert not (tmp_path / "strict").exists()
+    assert "ngfrac: error: --strict" in capfd.readouterr().err
+    assert cli.main(["run", SLIT, "--out", str(tmp_path / "run"), *coarse]) == 0
+    err = capfd.readouterr().err
+    assert err.count("ngfrac: warning: geometry.mesh_size = 0.05 is above epsilon/2 = 0.04") == 1
+    assert (tmp_path / "run" / "history.csv").exists()

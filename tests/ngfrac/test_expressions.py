@@ -32,3 +32,12 @@ def test_time_needed():
     with pytest.raises(ExpressionError, match="uses t"):
         Expression("10*t").to_coefficient()
     assert np.isclose(Expression("10*t").evaluate_numpy({"t": 0.5}), 5.0)
+
+
+@pytest.mark.parametrize("text, expected", [("1/0", np.inf), ("-1/0", -np.inf), ("10**400", np.inf),
+                                            ("0/0", None), ("sqrt(-1)", None), ("log(0)", -np.inf)])
+def test_numpy_evaluation_gives_inf_and_nan_instead_of_raising(text, expected):
+    """The scene check evaluates expressions with numpy: constants too (Python's 1.0/0.0
+    raised ZeroDivisionError, 10.0**400 OverflowError)."""
+    value = float(Expression(text).evaluate_numpy({}))
+    assert np.isnan(value) if expected is None else value == expected

@@ -103,7 +103,7 @@ def test_unknown_kind_suggests_a_plane_model():
 @pytest.mark.parametrize("value, match", [
     ("10*t", r"loads\[0\].value = '10\*t' is one expression, but model.kind = 'plane_strain' needs \[ux, uy\]"),
     (["0", "t", "0"], r"loads\[0\].value = \[\"0\", \"t\", \"0\"\] has 3 entries, .* needs 2"),
-    (["free", "free"], r"loads.value = .* every component is free"),
+    (["free", "free"], r"loads\[0\].value = .* every component is free"),
     (["0", "t +"], r"loads\[0\].value\[1\]: cannot parse expression 't \+'"),
     (["0", "fre"], r"loads\[0\].value\[1\]: .*unknown name 'fre'"),
     (["0", 1], None),
