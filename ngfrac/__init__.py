@@ -20,13 +20,15 @@ import os as _os
 import ngsolve as _ngs
 
 from .expressions import Expression, ExpressionError
+from .output import ngfrac_version as _ngfrac_version
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene
 from .stepper import PhaseFieldStepper, SolverError, StepRecord
 
 __all__ = ["Expression", "ExpressionError", "PhaseFieldStepper", "RunSummary", "Scene",
            "SceneError", "SolverError", "StepRecord", "load_scene", "run_scene"]
-__version__ = "0.1.0"
+__version__ = _ngfrac_version()
+"""From the installed package metadata, i.e. setup.cfg's ``version`` (the one place it is set)."""
 
 
 def _threads_from_environment() -> None:
