@@ -100,7 +100,7 @@ class Manifest:
         """A manifest listing the ngfrac files present in a folder that has none (older runs)."""
         folder = Path(folder)
         found = _legacy_files(folder)
-        found += [name for name in LEGACY_FOLDERS if (folder / name).is_dir()]
+        found += [name for name in LEGACY_FOLDERS if any(f.startswith(name) for f in found)]
         return cls(folder, found)
 
     def owns(self, name: str) -> bool:
