@@ -11,8 +11,10 @@ history equals an uninterrupted one; a changed scene (``time.t_end``, ``[output]
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
+import math
 import time
 import tomllib
 from contextlib import ExitStack
@@ -83,19 +85,33 @@ def _start(scene: Scene, out: Path, overwrite: bool,
     manifest = prepare_output_dir(out, overwrite)
     with manifest.writing("scene.toml"):
         atomic_write_text(out / "scene.toml", to_toml(scene.to_dict()))
-    info = {"scene": scene.name, **run_metadata(), "restarts": []}
+    info = run_info(scene)
     write_run_json(out, info, manifest)
     return PhaseFieldStepper(scene), manifest, info
 
 
+def run_info(scene: Scene) -> dict[str, Any]:
+    """The ``run.json`` data of a new run of ``scene`` (also results.h5's root attributes).
+
+    :func:`~ngfrac.output.run_metadata` (versions, git commit, threads, command line, start
+    time), the scene's name and an empty ``restarts`` list; fields derived from the scene
+    belong here too.
+    """
+    return {"scene": scene.name, **run_metadata(), "restarts": []}
+
+
 def _flat_keys(data: Any, prefix: str = "") -> dict[str, Any]:
-    """``{"time.t_end": 0.1, "loads.0.value": "10*t", ...}`` with JSON values."""
+    """``{"time.t_end": 0.1, "loads.0.value": "10*t", ...}`` with strict JSON values (a
+    non-finite number as its text, "nan", so that it compares equal to itself)."""
     if isinstance(data, dict):
         items = data.items()
     elif isinstance(data, (list, tuple)) and any(isinstance(v, dict) for v in data):
         items = ((str(i), v) for i, v in enumerate(data))
+    elif isinstance(data, (list, tuple)):
+        return {prefix: [_flat_keys(v)[""] for v in data]}
     else:
-        return {prefix: json.loads(json.dumps(data))}
+        finite = not isinstance(data, float) or math.isfinite(data)
+        return {prefix: json.loads(json.dumps(data)) if finite else repr(data)}
     out: dict[str, Any] = {}
     for key, value in items:
         out.update(_flat_keys(value, f"{prefix}.{key}" if prefix else str(key)))
@@ -120,7 +136,7 @@ def record_restart(out: Path, scene: Scene, stepper: PhaseFieldStepper,
                                       for key in sorted(set(old) | set(new))
                                       if old.get(key) != new.get(key)}
     if changed or old is None:
-        with manifest.writing("scene.toml") if manifest else ExitStack():
+        with manifest.writing("scene.toml") if manifest else contextlib.nullcontext():
             atomic_write_text(stored, to_toml(scene.to_dict()))
     info = read_run_json(out) or {"scene": scene.name}
     info.setdefault("restarts", []).append(
