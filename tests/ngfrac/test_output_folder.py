@@ -266,7 +266,9 @@ def test_overwrite_in_a_read_only_folder_removes_nothing(run_copy):
     before = {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")}
     with read_only(run_copy):
         result = ngfrac("run", SLIT, "--out", run_copy, *TINY, "--overwrite")
+        restart = ngfrac("run", "--restart", run_copy, "--set", "time.t_end=0.003", "--no-progress")
     assert_one_line_error(result, "cannot write")
+    assert_one_line_error(restart, "cannot write")
     assert {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")} == before
 
 
