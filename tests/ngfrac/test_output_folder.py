@@ -165,6 +165,8 @@ def test_restart_updates_the_scene_and_logs_itself(run_copy):
     assert result.returncode == 0, result.stderr
     assert 't_end = 0.003' in (run_copy / "scene.toml").read_text()
     assert open_results(run_copy / "results.h5").scene.time.t_end == 0.003
+    with h5py.File(run_copy / "checkpoint.h5", "r") as f:  # written again at step 6
+        assert int(f.attrs["k"]) == 6 and "t_end = 0.003" in f["scene"].asstr()[()]
     info = json.loads((run_copy / "run.json").read_text())
     assert info["command_line"][1] == "run" and "--restart" not in info["command_line"]
     (restart,) = info["restarts"]
