@@ -37,11 +37,33 @@ def public_members(module):
     return [(n, getattr(module, n)) for n in names if hasattr(module, n)]
 
 
+class _Named:
+    """Shows a sentinel default by its module-level name."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __repr__(self) -> str:
+        return self.name
+
+
 def signature(obj) -> str:
+    """The signature; a sentinel default (an ``object()`` such as ``scene.REQUIRED``, whose repr
+    is a memory address) is shown by its module-level name, so the page is the same every run."""
     try:
-        return str(inspect.signature(obj))
+        sig = inspect.signature(obj)
     except (TypeError, ValueError):
         return ""
+    module = inspect.getmodule(obj)
+    names = {id(value): name for name, value in vars(module).items()} if module else {}
+
+    def shown(param: inspect.Parameter) -> inspect.Parameter:
+        default = param.default
+        if default is param.empty or " at 0x" not in repr(default):
+            return param
+        return param.replace(default=_Named(names.get(id(default), type(default).__name__)))
+
+    return str(sig.replace(parameters=[shown(p) for p in sig.parameters.values()]))
 
 
 def main() -> None:

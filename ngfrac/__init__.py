@@ -22,6 +22,7 @@ import ngsolve as _ngs
 from .checks import ResolutionWarning, resolution_warnings
 from .expressions import Expression, ExpressionError
 from .geometry import MeshingError
+from .output import ngfrac_version as _ngfrac_version
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene
 from .stepper import PhaseFieldStepper, SolverError, StepRecord
@@ -29,7 +30,8 @@ from .stepper import PhaseFieldStepper, SolverError, StepRecord
 __all__ = ["Expression", "ExpressionError", "MeshingError", "PhaseFieldStepper", "ResolutionWarning",
            "RunSummary", "Scene", "SceneError", "SolverError", "StepRecord", "load_scene",
            "resolution_warnings", "run_scene"]
-__version__ = "0.1.0"
+__version__ = _ngfrac_version()
+"""From the installed package metadata, i.e. setup.cfg's ``version`` (the one place it is set)."""
 
 
 def _threads_from_environment() -> None:

@@ -33,6 +33,8 @@ class _Strict(Exception):
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="ngfrac", description="Phase-field crack propagation "
                                      "on adaptive NGSolve meshes.")
+    parser.add_argument("--version", action="version", version=_version_line(),
+                        help="print the versions of ngfrac, NGSolve and Python and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a scene, or continue one with --restart")
     run.add_argument("scene", nargs="?", help="scene file (TOML)")
@@ -56,6 +58,45 @@ def _parser() -> argparse.ArgumentParser:
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     check.add_argument("--strict", action="store_true", help=STRICT_HELP)
     return parser
+
+
+def _version_line() -> str:
+    import platform
+
+    import ngsolve
+
+    from . import __version__
+
+    return f"ngfrac {__version__} (NGSolve {ngsolve.__version__}, Python {platform.python_version()})"
+
+
+def _plot(args: argparse.Namespace) -> int:
+    """``ngfrac plot DIR``: the figures into DIR/plots, each listed in DIR's manifest."""
+    from .output import Manifest
+    from .plotting import plot_run
+
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise OutputError(f"run folder {str(folder)!r} does not exist; give the --out folder "
+                          "of an ngfrac run")
+    if not (folder / "history.csv").is_file():
+        raise OutputError(f"{str(folder)!r} is not a run folder (no history.csv); give the "
+                          "--out folder of an ngfrac run")
+    manifest = Manifest.load(folder) or Manifest.adopt(folder)
+    foreign = manifest.foreign("plots/")
+    if foreign:
+        raise OutputError(f"{str(folder / foreign[0])!r} was not written by ngfrac; move it "
+                          "before ngfrac plot replaces it")
+    try:
+        with manifest.writing("plots/"):
+            written = plot_run(folder, args.times)
+            manifest.add(*(path.relative_to(folder).as_posix() for path in written))
+    except OSError as err:
+        raise OutputError(f"cannot write the plots into {str(folder / 'plots')!r} "
+                          f"({err.strerror or err}); make the run folder writable") from None
+    for path in written:
+        print(path)
+    return 0
 
 
 def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
@@ -126,11 +167,7 @@ def main(argv: list[str] | None = None) -> int:
                         format="%(levelname)s %(name)s: %(message)s")
     try:
         if args.command == "plot":
-            from .plotting import plot_run
-
-            for path in plot_run(args.folder, args.times):
-                print(path)
-            return 0
+            return _plot(args)
         if args.command == "check":
             scene = load_scene(args.scene, args.overrides)
             _warn_resolution(scene, args.strict)

@@ -1,57 +1,235 @@
-"""Run folders: history.csv, VTK snapshots with a .pvd series, the resolved scene.
+"""Run folders: history.csv, VTK snapshots with a .pvd series, the resolved scene, the
+manifest of what ngfrac wrote, and the run's metadata (``run.json``).
 
 VTK files are written with NGSolve's ``VTKOutput`` (no GUI), one ``.vtu`` per snapshot, so
 the series stays valid when the mesh changes between snapshots; ``fields.pvd`` is rewritten
 atomically after each snapshot and opens in ParaView as a time series.
+
+Every file and folder ngfrac creates in a run folder is listed in ``manifest.json`` before it
+is written (:class:`Manifest`); ``overwrite`` removes exactly those and never anything else.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
+import datetime
+import json
+import logging
 import math
 import os
-import shutil
+import platform
+import subprocess
+import sys
 from pathlib import Path
-from typing import Any, Iterable, TextIO
+from typing import Any, Iterable, Iterator, TextIO
 from xml.sax.saxutils import quoteattr
 
 import ngsolve as ngs
 
-OWNED = ("history.csv", "scene.toml", "vtk", "history.png", "crack.png", "results.h5",
-         "checkpoint.h5", "checkpoint.tmp", "force_displacement.png", "plots")
-"""What ngfrac writes into a run folder (and may remove with ``overwrite``)."""
+log = logging.getLogger(__name__)
+
+MANIFEST = "manifest.json"
+"""The manifest's file name in a run folder."""
+MANIFEST_FORMAT = "ngfrac-manifest"
+RUN_JSON = "run.json"
+RUN_FORMAT = "ngfrac-run"
+
+LEGACY = ("history.csv", "scene.toml", "history.png", "crack.png", "results.h5",
+          "checkpoint.h5", "checkpoint.tmp", "force_displacement.png", "vtk/fields.pvd",
+          "vtk/fields_[0-9][0-9][0-9][0-9][0-9].vtu", "plots/history.png",
+          "plots/force_displacement.png", "plots/z_t*.png")
+"""The files (glob patterns) an ngfrac before manifests wrote. A folder without a manifest
+counts as a run when it holds one of them; ``overwrite`` then removes those files (and
+``vtk/``, ``plots/`` when they are left empty) and nothing else."""
+OWNED = LEGACY + (RUN_JSON,)
+"""The names ngfrac writes: a user's file at one of them is never replaced."""
+LEGACY_FOLDERS = ("plots/", "vtk/")
 
 
 class OutputError(RuntimeError):
     """The output folder cannot be used as asked."""
 
 
-def prepare_output_dir(path: str | Path, overwrite: bool = False) -> Path:
-    """Create the run folder, refusing to mix with an earlier run unless ``overwrite``.
+def _reason(err: OSError) -> str:
+    return err.strerror or str(err).splitlines()[0]
 
-    With ``overwrite`` only the files ngfrac writes are removed; anything else stays.
+
+# -- the manifest -----------------------------------------------------------------------------
+class Manifest:
+    """The files and folders ngfrac created in a run folder, kept in ``manifest.json``.
+
+    Names are relative to the folder, folders end with ``/``. A name is added (and the
+    manifest saved, atomically) *before* its file is written, so a run killed at any moment
+    leaves no file of its own unlisted; :meth:`writing` drops names whose file was not made.
+
+    Parameters
+    ----------
+    folder : Path
+        The run folder.
+    entries : iterable of str, optional
+        Names already listed.
+    """
+
+    def __init__(self, folder: str | Path, entries: Iterable[str] = ()) -> None:
+        self.folder = Path(folder)
+        self.entries: list[str] = list(dict.fromkeys(entries))
+
+    @property
+    def path(self) -> Path:
+        return self.folder / MANIFEST
+
+    @classmethod
+    def load(cls, folder: str | Path) -> "Manifest | None":
+        """The manifest of ``folder``, or None when it has none."""
+        path = Path(folder) / MANIFEST
+        if not path.exists():
+            return None
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as err:
+            reason = _reason(err) if isinstance(err, OSError) else "not valid JSON"
+            raise OutputError(f"cannot read {str(path)!r} ({reason}); remove it by hand if "
+                              "the folder's files are yours") from None
+        if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
+            raise OutputError(f"{str(path)!r} was not written by ngfrac; rename it or choose "
+                              "another --out")
+        return cls(folder, [str(name) for name in data.get("files", [])])
+
+    @classmethod
+    def adopt(cls, folder: str | Path) -> "Manifest":
+        """A manifest listing the ngfrac files present in a folder that has none (older runs)."""
+        folder = Path(folder)
+        found = _legacy_files(folder)
+        found += [name for name in LEGACY_FOLDERS if any(f.startswith(name) for f in found)]
+        return cls(folder, found)
+
+    def owns(self, name: str) -> bool:
+        """Whether ``name`` (relative to the folder) is listed."""
+        return name in self.entries or name.rstrip("/") + "/" in self.entries
+
+    def foreign(self, under: str = "") -> list[str]:
+        """Files at names ngfrac writes (:data:`OWNED`) under ``under`` that are not listed."""
+        return [name for name in _legacy_files(self.folder, OWNED)
+                if name.startswith(under) and not self.owns(name)]
+
+    def save(self) -> None:
+        """Write the manifest atomically."""
+        text = json.dumps({"format": MANIFEST_FORMAT, "format_version": 1,
+                           "files": self.entries}, indent=1) + "\n"
+        atomic_write_text(self.path, text)
+
+    def add(self, *names: str) -> None:
+        """List ``names`` (saved at once when one is new)."""
+        new = [name for name in names if name not in self.entries]
+        if new:
+            self.entries += new
+            self.save()
+
+    @contextlib.contextmanager
+    def writing(self, *names: str) -> Iterator[None]:
+        """List ``names`` while they are written; afterwards keep only those that exist.
+
+        A folder (``"vtk/"``) is listed only when ngfrac creates it. A file that exists and
+        is not listed is a user's: :class:`OutputError`, and nothing is written.
+        """
+        new = []
+        for name in names:
+            target = self.folder / name
+            if self.owns(name):
+                continue
+            if name.endswith("/"):
+                if not target.exists():
+                    new.append(name)
+            elif target.exists():
+                raise OutputError(f"{str(target)!r} exists and was not written by ngfrac; "
+                                  "move it or choose another --out")
+            else:
+                new.append(name)
+        self.add(*new)
+        try:
+            yield
+        finally:
+            made = [name for name in new if (self.folder / name).exists()]
+            if len(made) < len(new):
+                self.entries = [e for e in self.entries if e not in new or e in made]
+                self.save()
+
+    def remove_listed(self) -> list[str]:
+        """Remove the listed files, then the listed folders left empty; returns folders kept."""
+        files = [name for name in self.entries if not name.endswith("/")]
+        folders = sorted((name for name in self.entries if name.endswith("/")),
+                         key=lambda name: -name.count("/"))
+        for name in files:
+            target = self.folder / name
+            if target.is_file() or target.is_symlink():
+                target.unlink()
+        kept = []
+        for name in folders:
+            target = self.folder / name
+            if target.is_dir():
+                if any(target.iterdir()):
+                    kept.append(name)
+                else:
+                    target.rmdir()
+        self.entries = kept
+        self.save()
+        return kept
+
+
+def _legacy_files(folder: Path, patterns: tuple[str, ...] = LEGACY) -> list[str]:
+    found: list[str] = []
+    for pattern in patterns:
+        found += sorted(str(p.relative_to(folder)) for p in folder.glob(pattern) if p.is_file())
+    return list(dict.fromkeys(found))
+
+
+def prepare_output_dir(path: str | Path, overwrite: bool = False) -> Manifest:
+    """Create or reuse a run folder; returns its (new) manifest.
+
+    A folder that holds an earlier run (its manifest lists files, or, without a manifest,
+    it holds files of :data:`LEGACY`) is refused unless ``overwrite``; with it, only the files
+    ngfrac wrote are removed: those its manifest lists, or without one the :data:`LEGACY`
+    files. A user's file is never removed, and a user's file at a name the run writes is
+    refused before anything is removed. Raises :class:`OutputError` with one line.
     """
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"output path {str(path)!r} exists and is not a folder")
-    previous = [name for name in OWNED if (path / name).exists()]
+    manifest = Manifest.load(path) if path.is_dir() else None
+    if manifest is None:
+        manifest = Manifest.adopt(path) if path.is_dir() else Manifest(path)
+    previous = [name for name in manifest.entries if (path / name).exists()
+                and not name.endswith("/")]
     if previous and not overwrite:
         raise OutputError(f"output folder {str(path)!r} already holds a run ({previous[0]}); "
                           "choose another --out or pass --overwrite")
-    for name in previous:
-        target = path / name
-        shutil.rmtree(target) if target.is_dir() else target.unlink()
+    foreign = [name for name in manifest.foreign() if not name.startswith("plots/")]
+    if foreign:
+        raise OutputError(f"output folder {str(path)!r} holds {foreign[0]}, which ngfrac did not "
+                          "write (it is not in manifest.json); move it or choose another --out")
     try:
         path.mkdir(parents=True, exist_ok=True)
+        manifest.save()  # also the check that the folder is writable, before anything goes
+        if previous:
+            log.info("removing the earlier run's files in %s: %s", path, ", ".join(previous))
+        manifest.remove_listed()
     except OSError as err:
-        raise OutputError(f"cannot create output folder {str(path)!r}: {err.strerror}") from None
-    return path
+        raise OutputError(f"cannot write into output folder {str(path)!r} ({_reason(err)}); "
+                          "choose another --out or make it writable") from None
+    return manifest
 
 
 def atomic_write_text(path: Path, text: str) -> None:
     """Write a text file via a temporary name and a rename, so readers never see half a file."""
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {str(path)!r} ({_reason(err)}); choose another --out "
+                          "or make the folder writable") from None
 
 
 class HistoryWriter:
@@ -108,14 +286,27 @@ class VTKSeries:
         Where ``fields_00000.vtu``, ... and ``fields.pvd`` go.
     subdivision : int
         Subdivisions per element (order - 1 shows P2 fields faithfully).
+
+    manifest : Manifest, optional
+        Where each file is listed before it is written (``folder`` must be inside its folder).
     """
 
-    def __init__(self, folder: Path, subdivision: int, stem: str = "fields") -> None:
+    def __init__(self, folder: Path, subdivision: int, stem: str = "fields",
+                 manifest: Manifest | None = None) -> None:
         self.folder = folder
         self.subdivision = subdivision
         self.stem = stem
+        self.manifest = manifest
         self.entries: list[tuple[float, str]] = []
-        folder.mkdir(parents=True, exist_ok=True)
+        with self._writing(""):
+            folder.mkdir(parents=True, exist_ok=True)
+
+    def _writing(self, name: str) -> contextlib.AbstractContextManager[None]:
+        """The manifest's :meth:`Manifest.writing` for a file of the series ("": the folder)."""
+        if self.manifest is None:
+            return contextlib.nullcontext()
+        relative = (self.folder / name).relative_to(self.manifest.folder).as_posix()
+        return self.manifest.writing(relative + "/" if not name else relative)
 
     def resume(self, t: float) -> None:
         """Keep the snapshots of an earlier run up to time ``t`` (for a restart)."""
@@ -134,7 +325,8 @@ class VTKSeries:
         name = f"{self.stem}_{len(self.entries):05d}"
         output = ngs.VTKOutput(ma=mesh, coefs=list(fields.values()), names=list(fields),
                                filename=str(self.folder / name), subdivision=self.subdivision)
-        output.Do()
+        with self._writing(name + ".vtu"):
+            output.Do()
         self.entries.append((t, name + ".vtu"))
         self._write_collection()
         return self.folder / (name + ".vtu")
@@ -146,7 +338,8 @@ class VTKSeries:
         for t, file in self.entries:
             lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(file)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
-        atomic_write_text(self.folder / f"{self.stem}.pvd", "\n".join(lines))
+        with self._writing(f"{self.stem}.pvd"):
+            atomic_write_text(self.folder / f"{self.stem}.pvd", "\n".join(lines))
 
 
 def to_toml(data: dict[str, Any]) -> str:
@@ -176,3 +369,97 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} as TOML")
+
+
+# -- run metadata -----------------------------------------------------------------------------
+def ngfrac_version() -> str:
+    """ngfrac's version, from the installed package metadata (set in setup.cfg)."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("ngfrac")
+    except metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
+def git_revision() -> tuple[str | None, bool | None]:
+    """The commit ngfrac's source checkout is at and whether it has uncommitted changes.
+
+    ``(None, None)`` when ngfrac is not run from a git checkout of itself or git is missing.
+    """
+    root = Path(__file__).resolve().parents[1]
+    if not (root / "setup.cfg").exists():
+        return None, None  # an installed copy, not a checkout
+
+    def git(*args: str) -> str | None:
+        try:
+            done = subprocess.run(["git", "-C", str(root), *args], capture_output=True,
+                                  text=True, timeout=30)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return done.stdout if done.returncode == 0 else None
+
+    top = git("rev-parse", "--show-toplevel", "HEAD")
+    if top is None or len(top.split()) != 2 or Path(top.split()[0]).resolve() != root:
+        return None, None
+    status = git("status", "--porcelain", "--untracked-files=no")
+    return top.split()[1], None if status is None else bool(status.strip())
+
+
+def ngsolve_threads() -> int:
+    """The number of threads NGSolve's ``TaskManager`` runs with (``NGFRAC_THREADS`` caps it)."""
+    with ngs.TaskManager():
+        return int(ngs.GetNumThreads())
+
+
+def run_metadata(argv: list[str] | None = None) -> dict[str, Any]:
+    """What a run folder records about the run's environment (``run.json``, results.h5).
+
+    A flat dict of JSON values; callers may add fields before writing it.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The command line; default ``sys.argv``.
+
+    Returns
+    -------
+    dict
+        ``ngfrac_version``, ``git_commit`` and ``git_dirty`` (None outside a git checkout),
+        ``ngsolve_version``, ``netgen_version``, ``python_version``, ``threads``,
+        ``command_line`` (list of str) and ``started`` (UTC, ISO 8601).
+    """
+    import netgen
+
+    commit, dirty = git_revision()
+    return {"ngfrac_version": ngfrac_version(), "git_commit": commit, "git_dirty": dirty,
+            "ngsolve_version": str(ngs.__version__), "netgen_version": str(netgen.__version__),
+            "python_version": platform.python_version(), "threads": ngsolve_threads(),
+            "command_line": [str(a) for a in (sys.argv if argv is None else argv)],
+            "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+
+
+def read_run_json(folder: str | Path) -> dict[str, Any] | None:
+    """The ``run.json`` of a run folder, or None when there is none."""
+    path = Path(folder) / RUN_JSON
+    if not path.exists():
+        return None
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        reason = _reason(err) if isinstance(err, OSError) else "not valid JSON"
+        raise OutputError(f"cannot read {str(path)!r} ({reason})") from None
+    if not isinstance(data, dict) or data.get("format") != RUN_FORMAT:
+        raise OutputError(f"{str(path)!r} was not written by ngfrac")
+    return data
+
+
+def write_run_json(folder: str | Path, data: dict[str, Any],
+                   manifest: Manifest | None = None) -> Path:
+    """Write ``run.json`` atomically (strict JSON: a NaN raises ValueError)."""
+    path = Path(folder) / RUN_JSON
+    text = json.dumps({"format": RUN_FORMAT, "format_version": 1, **data}, indent=1,
+                      allow_nan=False) + "\n"
+    with manifest.writing(RUN_JSON) if manifest is not None else contextlib.nullcontext():
+        atomic_write_text(path, text)
+    return path

@@ -439,7 +439,7 @@ class ResultsWriter:
         path = Path(path)
         with read_hdf5(path, "results file", ResultsError) as f:
             check_format(f, path, FORMAT, FORMAT_VERSION, "results file", ResultsError)
-            stored, _ = read_scene(f, path, ResultsError)
+            stored, stored_text = read_scene(f, path, ResultsError)
             columns = [str(c) for c in f["history"].attrs["columns"]]
             f["snapshots"]  # noqa: B018 - a missing group raises here, with a clear message
         differences = scene_differences(stored, scene)
@@ -458,8 +458,32 @@ class ResultsWriter:
         for name in list(f["snapshots"]):
             if int(f["snapshots"][name].attrs["step"]) > step:
                 del f["snapshots"][name]
+        if stored_text != scene_text(scene):  # a longer time.t_end, other [output] keys
+            writer.replace_scene(scene)
         f.flush()
         return writer
+
+    def replace_scene(self, scene: Scene) -> None:
+        """Store ``scene`` instead of the file's scene (a restart that runs longer)."""
+        with self._writing():
+            del self._file["scene"]
+            write_scene(self._file, scene)
+            self.scene = scene
+            self._file.flush()
+
+    def set_attributes(self, attributes: Mapping[str, Any]) -> None:
+        """Store run metadata as root attributes: lists and dicts as JSON text, None left out."""
+        import json
+
+        with self._writing():
+            for key, value in attributes.items():
+                if key in ("format", "format_version"):
+                    continue  # the run.json's own format marker, not the file's
+                if isinstance(value, (list, dict)):
+                    value = json.dumps(value)
+                if value is not None:
+                    self._file.attrs[key] = value
+            self._file.flush()
 
     # -- history --
     def append(self, record: "StepRecord | Sequence[float]") -> None:

@@ -542,7 +542,7 @@ class Discretization(_Section):
 
 @dataclass(frozen=True)
 class Output(_Section):
-    """What to write and how often (0 = never, except the final step for VTK)."""
+    """What to write and how often (0 = never; for VTK: only the last step)."""
 
     SECTION: ClassVar[str] = "output"
     vtk_every: int = 10
@@ -556,7 +556,8 @@ class Output(_Section):
 
     def validate(self) -> None:
         s = self.SECTION
-        _require(self.vtk_every >= 0, s, "vtk_every", self.vtk_every, "must be >= 0 (0 = never)")
+        _require(self.vtk_every >= 0, s, "vtk_every", self.vtk_every,
+                 "must be >= 0 (0: only the last step)")
         _require(self.history_every >= 1, s, "history_every", self.history_every, "must be >= 1")
         _require(-1 <= self.vtk_subdivision <= 5, s, "vtk_subdivision", self.vtk_subdivision,
                  "must be in -1..5 (-1 = order - 1)")

@@ -1,17 +1,54 @@
-"""The docs cover what a user can set: every scene key appears in the user guide's tables."""
+"""The docs agree with the code, in both directions: every scene key, CLI flag and subcommand,
+output file and expression name in docs/user-guide.md exists, and everything that exists is
+documented; docs/api.md holds no memory addresses; demo comments cite files that exist."""
+import argparse
 import dataclasses
+import importlib.util
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
-from ngfrac.scene import LISTS, SECTIONS
+import pytest
 
-GUIDE = Path(__file__).resolve().parents[1] / "docs" / "user-guide.md"
+from ngfrac.cli import _parser
+from ngfrac.expressions import CONSTANTS, FUNCTIONS, VARIABLES
+from ngfrac.scene import LISTS, SECTIONS, SceneError
+
+ROOT = Path(__file__).resolve().parents[1]
+GUIDE = ROOT / "docs" / "user-guide.md"
+SLIT = str(ROOT / "demos" / "mode3_slit.toml")
+# P1 on a coarse uniform mesh, 4 steps with a checkpoint: a run that writes every kind of file
+TINY = ["--set", "phase_field.epsilon=0.08", "--set", "geometry.mesh_size=0.04",
+        "--set", "adaptivity.enabled=false", "--set", "discretization.order=1",
+        "--set", "time.t_end=0.002", "--set", "output.checkpoint_every=2", "--no-progress"]
 
 
+def section(title: str) -> str:
+    """The guide's text under a heading (up to the next heading of the same or a higher level)."""
+    text = GUIDE.read_text()
+    level = title.split(" ")[0]
+    if f"\n{title}\n" not in text:
+        pytest.fail(f"docs/user-guide.md has no heading {title!r}")
+    start = text.index(f"\n{title}\n")
+    end = re.search(rf"\n#{{1,{len(level)}}} ", text[start + 1:])
+    return text[start: start + 1 + end.start()] if end else text[start:]
+
+
+def table_rows(text: str) -> list[list[str]]:
+    """The cells of each table row, without header and rule rows."""
+    lines = text.splitlines()
+    return [[cell.strip() for cell in line.strip().strip("|").split(" | ")]
+            for line, after in zip(lines, lines[1:] + [""])
+            if line.startswith("| ") and not after.startswith("|---")]
+
+
+# -- scene keys -------------------------------------------------------------------------------
 def documented_keys():
     text = GUIDE.read_text()
     keys = {}
-    for block in re.split(r"\n### ", text):
+    for block in re.split(r"\n#{2,3} ", text):  # a "## " heading ends a section's table
         header = re.match(r"`\[+([a-z_]+)\]+`", block)
         if not header:
             continue
@@ -19,15 +56,168 @@ def documented_keys():
         names = set()
         for row in rows:
             names.update(part.strip() for part in row.split(","))
-        keys[header.group(1)] = names
+        keys[header.group(1)] = names - {"key"}
     return keys
 
 
 def test_every_scene_key_is_in_the_user_guide():
     keys = documented_keys()
     missing = []
-    for section, cls in {**SECTIONS, **LISTS}.items():
+    for section_name, cls in {**SECTIONS, **LISTS}.items():
         for field in dataclasses.fields(cls):
-            if field.name not in keys.get(section, set()):
-                missing.append(f"{section}.{field.name}")
+            if field.name not in keys.get(section_name, set()):
+                missing.append(f"{section_name}.{field.name}")
     assert not missing, f"scene keys missing from docs/user-guide.md: {missing}"
+
+
+def test_every_documented_scene_key_exists():
+    classes = {**SECTIONS, **LISTS}
+    unknown = []
+    for section_name, names in documented_keys().items():
+        if section_name not in classes:
+            unknown.append(f"[{section_name}]")
+            continue
+        fields = {f.name for f in dataclasses.fields(classes[section_name])}
+        unknown += [f"{section_name}.{name}" for name in sorted(names - fields)]
+    assert not unknown, f"docs/user-guide.md documents keys the scene does not have: {unknown}"
+
+
+# -- the command line -------------------------------------------------------------------------
+def parser_actions() -> dict[str, list[set[str]]]:
+    """{"ngfrac": [spellings of each top-level option], "run": [...], ...}; a positional is
+    named by its dest in upper case (SCENE); help is left out."""
+    def arguments(parser: argparse.ArgumentParser) -> list[set[str]]:
+        return [set(action.option_strings or [action.dest.upper()])
+                for action in parser._actions  # argparse has no public walk
+                if not isinstance(action, (argparse._HelpAction, argparse._SubParsersAction))]
+
+    top = _parser()
+    out = {"ngfrac": arguments(top)}
+    for action in top._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            out.update({name: arguments(sub) for name, sub in action.choices.items()})
+    return out
+
+
+def documented_arguments() -> dict[str, set[str]]:
+    found: dict[str, set[str]] = {}
+    for row in table_rows(section("## The command line")):
+        if len(row) != 3 or not re.fullmatch(r"[a-z]+", row[0]):
+            continue  # the file table below has other columns
+        names = {token.split(" ")[0] for token in re.findall(r"`([^`]+)`", row[1])}
+        found.setdefault(row[0], set()).update(names)
+    return found
+
+
+def test_cli_table_lists_every_subcommand_and_flag_and_nothing_else():
+    code = {command: set().union(*spellings) for command, spellings in parser_actions().items()}
+    docs = documented_arguments()
+    assert set(docs) == set(code), f"subcommands: parser {sorted(code)}, guide {sorted(docs)}"
+    for command in code:
+        assert docs[command] == code[command], (
+            f"ngfrac {command}: undocumented {sorted(code[command] - docs[command])}, "
+            f"documented but absent {sorted(docs[command] - code[command])}")
+
+
+def test_cli_summary_shows_every_subcommand_and_flag():
+    block = re.search(r"```\n(.*?)```", section("## The command line"), flags=re.S).group(1)
+    for command, actions in parser_actions().items():
+        prefix = "ngfrac " if command == "ngfrac" else f"ngfrac {command} "
+        text = " ".join(line for line in block.splitlines() if line.startswith(prefix))
+        assert text, f"the summary has no line for ngfrac {command}"
+        missing = [sorted(spellings) for spellings in actions
+                   if not any(re.search(rf"(?<![\w-]){re.escape(name)}(?![\w-])", text)
+                              for name in spellings if name.startswith("-"))
+                   and any(name.startswith("-") for name in spellings)]
+        assert not missing, f"ngfrac {command}: the summary lacks {missing}"
+
+
+# -- output files -----------------------------------------------------------------------------
+def documented_files() -> dict[str, re.Pattern]:
+    """Each documented file name as a pattern: NNNNN is a number, <t> any time."""
+    patterns = {}
+    for row in table_rows(section("### Files in a run folder")):
+        for name in re.findall(r"`([^`]+)`", row[0]):
+            regex = re.escape(name).replace("NNNNN", r"\d{5}").replace("<t>", r"[^/]+")
+            patterns[name] = re.compile(regex)
+    return patterns
+
+
+@pytest.fixture(scope="module")
+def written_files(tmp_path_factory):
+    """The files a tiny `ngfrac run` and `ngfrac plot` write into a run folder."""
+    out = tmp_path_factory.mktemp("docs") / "run"
+    env = {**os.environ, "NGFRAC_THREADS": "1"}
+    for args in (["run", SLIT, "--out", str(out), *TINY], ["plot", str(out)]):
+        result = subprocess.run([sys.executable, "-m", "ngfrac", *args], capture_output=True,
+                                text=True, env=env)
+        assert result.returncode == 0, result.stderr
+    return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+
+
+def test_every_file_a_run_writes_is_documented(written_files):
+    patterns = documented_files()
+    undocumented = [name for name in written_files
+                    if not any(p.fullmatch(name) for p in patterns.values())]
+    assert not undocumented, f"files written but not in the guide's file table: {undocumented}"
+
+
+def test_every_documented_file_is_written(written_files):
+    absent = [name for name, p in documented_files().items()
+              if not any(p.fullmatch(f) for f in written_files)]
+    assert not absent, f"files in the guide that a run does not write: {absent} ({written_files})"
+
+
+# -- one meaning for output.vtk_every = 0 ------------------------------------------------------
+def test_vtk_every_zero_means_only_the_last_step(tmp_path):
+    from ngfrac.runner import run_scene
+    from scenes import quick_slit
+
+    row = next(r for r in table_rows(section("### `[output]`")) if r[0] == "vtk_every")
+    assert "0: only the last step" in row[3]
+    with pytest.raises(SceneError, match=r"0: only the last step"):
+        quick_slit("output.vtk_every=-1")
+    scene = quick_slit("output.vtk_every=0", "time.t_end=0.002", "discretization.order=1",
+                       "output.results=false", "phase_field.epsilon=0.08",
+                       "geometry.mesh_size=0.04")
+    summary = run_scene(scene, tmp_path / "run", plots=False)
+    assert summary.n_snapshots == 1
+    pvd = (tmp_path / "run" / "vtk" / "fields.pvd").read_text()
+    (t,) = re.findall(r'timestep="([^"]+)"', pvd)
+    assert float(t) == summary.last.t == pytest.approx(0.002)
+
+
+# -- expressions ------------------------------------------------------------------------------
+def test_expression_names_in_the_guide_are_those_allowed():
+    text = section("## Scene files")
+    paragraph = text[text.index("Expressions are strings"): text.index("refused when")]
+    documented = {token for token in re.findall(r"`([^`]+)`", paragraph)
+                  if re.fullmatch(r"[a-z_][a-z0-9_]*", token)}
+    allowed = set(VARIABLES) | set(CONSTANTS) | set(FUNCTIONS)
+    assert documented == allowed, (f"undocumented {sorted(allowed - documented)}, "
+                                   f"documented but refused {sorted(documented - allowed)}")
+
+
+# -- api.md and demos -------------------------------------------------------------------------
+def test_api_reference_shows_no_memory_addresses():
+    spec = importlib.util.spec_from_file_location("make_api", ROOT / "docs" / "make_api.py")
+    make_api = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make_api)
+    from ngfrac.scene import PhaseField
+
+    assert " at 0x" not in make_api.signature(PhaseField)
+    assert "epsilon: 'float' = REQUIRED" in make_api.signature(PhaseField)
+    assert " at 0x" not in (ROOT / "docs" / "api.md").read_text()
+
+
+def test_demo_comments_cite_files_that_exist():
+    missing = []
+    for demo in sorted((ROOT / "demos").iterdir()):
+        if demo.suffix not in (".py", ".toml"):
+            continue
+        for name in re.findall(r"(?<![\w/])((?:[\w-]+/)*[\w-]+\.(?:md|py|toml))\b", demo.read_text()):
+            if "NAME" in name or name.startswith("OUT_DIR"):
+                continue  # a placeholder, or an output
+            if not any((base / name).exists() for base in (ROOT, ROOT / "demos", ROOT / "docs")):
+                missing.append(f"{demo.name}: {name}")
+    assert not missing, f"demo comments cite files that are not in the project: {missing}"
