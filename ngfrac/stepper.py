@@ -133,7 +133,7 @@ class PhaseFieldStepper:
     """
 
     def __init__(self, scene: Scene, mesh: ngs.Mesh | None = None) -> None:
-        self.scene = scene
+        self._scene = scene
         self.model = make_model(scene)
         self.k = 0
         self.ticks = 0
@@ -164,6 +164,18 @@ class PhaseFieldStepper:
         self._set_initial_state()
         if self.adapter is not None and not given:
             self._adapt_initial_mesh()
+
+    @property
+    def scene(self) -> Scene:
+        """The scene this stepper was built for (read-only: its forms, spaces and loads are
+        made from it; for another scene build a new stepper, e.g. from
+        ``dataclasses.replace(stepper.scene, ...)``)."""
+        return self._scene
+
+    @scene.setter
+    def scene(self, value: Scene) -> None:
+        raise AttributeError("a stepper's scene cannot be changed: its forms, spaces and loads "
+                             "were built from it; make a new PhaseFieldStepper(new_scene)")
 
     def _on_boundary(self, point: np.ndarray) -> bool:
         """Whether a point lies on the boundary of the scene's rectangle or box."""
@@ -587,6 +599,9 @@ class PhaseFieldStepper:
         diagnose : bool
             Compute energies, crack length, tip and reactions; else those are NaN.
         """
+        if self.finished:
+            raise RuntimeError(f"the run is at its end time t = {self.t:g} (time.t_end); "
+                               "build a stepper of a scene with a later time.t_end to go on")
         started = time.perf_counter()
         settings = self.scene.time
         with self._step_threads():

@@ -1,0 +1,30 @@
+"""The stepper from a script: a clear error after the end, a scene that cannot be swapped."""
+import dataclasses
+
+import pytest
+from scenes import quick_slit
+
+from ngfrac import PhaseFieldStepper
+
+
+@pytest.fixture(scope="module")
+def finished():
+    stepper = PhaseFieldStepper(quick_slit("time.t_end=2e-3", "time.dt=1e-3",
+                                           "discretization.order=1"))
+    records = list(stepper.run())
+    return stepper, records
+
+
+def test_step_after_the_end_says_so(finished):
+    stepper, records = finished
+    assert len(records) == 2 and stepper.finished
+    with pytest.raises(RuntimeError, match="at its end time t = 0.002"):
+        stepper.step()
+
+
+def test_the_scene_of_a_live_stepper_cannot_be_swapped(finished):
+    stepper, _ = finished
+    longer = dataclasses.replace(stepper.scene, time=dataclasses.replace(stepper.scene.time, t_end=1.0))
+    with pytest.raises(AttributeError, match="make a new PhaseFieldStepper"):
+        stepper.scene = longer
+    assert stepper.scene.time.t_end == pytest.approx(2e-3)
