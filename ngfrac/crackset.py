@@ -10,7 +10,8 @@ Along the crack set, ``s`` is the distance from the initial crack through the se
 the node graph, edge lengths as weights). A node is on the *ridge* when no neighbour across
 the band (offset within 45 degrees of the normal to the local direction of growth, the
 direction in which ``s`` increases) has a larger z: the ridge is where z is largest across the
-band. The tip is the ridge node farthest along the crack (largest ``s``). In 3D the crack is a
+band. The tip is the end of the ridge: the crack node farthest in the direction of growth
+in the 45-degree cone ahead of the ridge node with the largest ``s``. In 3D the crack is a
 surface and its front a curve; the tip is the node of the crack set farthest along it (the
 most advanced point of the front), without the ridge test, which needs a 1D crack.
 """
@@ -242,12 +243,14 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         return CrackSet(tip, ridge_points, ridge_s, tip[None, :], 0.0, n_zones, len(members))
     tip = ridge_points[-1]
     if direction is not None:
-        # the direction at the ridge's end: from the ridge a little behind it (the gradient
-        # of s is poor where the band rounds off)
-        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.25 * bin_width)
-        heading = tip - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[ridge][order][-1]
+        # the ridge's end and the direction there, from the ridge nodes near it and a little
+        # behind it (where z is nearly flat across a wide front, single nodes and the
+        # gradient of s scatter across the band)
+        end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
+        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
+        heading = end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[ridge][order][-1]
         if np.linalg.norm(heading) > 0:
-            tip = _front(points[members], s, tip, heading / np.linalg.norm(heading))
+            tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
     grown = ridge_s > band
     origin = start if start is not None else ridge_points[0]
     path = _ridge_path(np.vstack([ridge_points[grown], tip]), np.append(ridge_s[grown], np.inf),
@@ -256,15 +259,17 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     return CrackSet(tip, ridge_points, ridge_s, path, length, n_zones, len(members))
 
 
-def _front(points: np.ndarray, s: np.ndarray, ridge_end: np.ndarray, direction: np.ndarray) -> np.ndarray:
-    """The tip: the crack node farthest along the crack in the cone of 45 degrees ahead of
-    the ridge's end (where the band rounds off, z falls towards 1/2 in every direction, so
-    the ridge test stops a little behind the z = 1/2 front; a damaged corner beside the
-    ridge's end, where the crack met a boundary, is not ahead of it)."""
+def _front(points: np.ndarray, s: np.ndarray, ridge_end: np.ndarray, direction: np.ndarray,
+           depth: float) -> np.ndarray:
+    """The tip: the mean of the crack nodes in the cone of 45 degrees ahead of the ridge's
+    end that lie within ``depth`` of the farthest one in the direction of growth. (Where the
+    band rounds off, z falls towards 1/2 in every direction, so the ridge test stops a little
+    behind the z = 1/2 front; a damaged corner beside the ridge's end, where the crack met a
+    boundary, is not ahead of it; the mean keeps a flat front's scatter out.)"""
     offset = points - ridge_end
-    distance = np.linalg.norm(offset, axis=1)
-    ahead = (offset @ direction >= ACROSS_COS * distance) & np.isfinite(s)
+    along = offset @ direction
+    ahead = (along >= ACROSS_COS * np.linalg.norm(offset, axis=1)) & np.isfinite(s)
     if not np.any(ahead):
         return ridge_end
-    candidates = np.flatnonzero(ahead)
-    return points[candidates[int(np.argmax(s[candidates]))]]
+    front = ahead & (along >= along[ahead].max() - depth)
+    return points[front].mean(axis=0)
