@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Callable
 
 from .checkpoint import resume, save_checkpoint
+from .fields import snapshot_fields
 from .output import (HistoryWriter, OutputError, VTKSeries, atomic_write_text, prepare_output_dir,
                      to_toml)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -40,11 +41,9 @@ class RunSummary:
 
 
 def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
-    """One VTK snapshot of u, z and gamma."""
-    import ngsolve as ngs
-
-    gamma = stepper.gamma if not isinstance(stepper.gamma, float) else ngs.CoefficientFunction(stepper.gamma)
-    series.write(stepper.mesh, {"u": stepper.u, "z": stepper.z, "gamma": gamma}, stepper.t)
+    """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.fields.snapshot_fields`
+    (energy density, stress, estimator, element size)."""
+    series.write(stepper.mesh, snapshot_fields(stepper), stepper.t)
 
 
 def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
