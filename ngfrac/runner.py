@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Callable
 
 from .checkpoint import resume, save_checkpoint
+from .crackpath import crack_path_rows, final_ridge
 from .fields import snapshot_fields
 from .output import (HistoryWriter, OutputError, VTKSeries, atomic_write_text, prepare_output_dir,
                      to_toml)
@@ -44,6 +45,19 @@ def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
     """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.fields.snapshot_fields`
     (energy density, stress, estimator, element size)."""
     series.write(stepper.mesh, snapshot_fields(stepper), stepper.t)
+
+
+def write_crack_path(out: Path, stepper: PhaseFieldStepper) -> Path:
+    """crack_path.csv: the tip track of history.csv and the final ridge of z (2D with an
+    initial crack; :func:`ngfrac.crackpath.crack_path_rows` has the layout)."""
+    history = read_history(out / "history.csv")
+    ridge = final_ridge(stepper.scene, stepper.mesh, stepper.z)
+    header, rows = crack_path_rows(history, ridge, stepper.k, stepper.t)
+    path = out / "crack_path.csv"
+    with HistoryWriter(path, header) as writer:
+        for row in rows:
+            writer.write(row)
+    return path
 
 
 def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
@@ -141,6 +155,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                 on_record(record)
             if on_step is not None:
                 on_step(stepper)
+    with stepper.timer.phase("output: crack path"):
+        write_crack_path(out, stepper)
     if plots:
         with stepper.timer.phase("output: plots"):
             write_plots(out, stepper)
