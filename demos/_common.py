@@ -12,7 +12,7 @@ import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
 from ngfrac.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
-from ngfrac.plotting import read_history
+from ngfrac.plotting import new_figure, read_history
 
 
 def json_safe(value: Any) -> Any:
@@ -92,13 +92,9 @@ def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: 
                             label: tuple[str, str], estimate: tuple[float, float] | None = None,
                             curve: str = "phase field") -> Path:
     """The force-displacement curve with its peak marked (and an LEFM estimate, when given)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     peak = int(np.argmax(force))
-    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    fig = new_figure(figsize=(6, 4.2), constrained_layout=True)
+    ax = fig.subplots()
     ax.plot(u, force, "-", lw=1.5, label=curve)
     ax.plot(u[peak], force[peak], "o", color="C3",
             label=f"peak {force[peak]:.3f} kN at {u[peak]:.3g} mm")
@@ -108,5 +104,4 @@ def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: 
     ax.grid(alpha=0.3)
     ax.legend()
     fig.savefig(png, dpi=120)
-    plt.close(fig)
     return png
