@@ -124,3 +124,64 @@ def test_size_estimate_and_warning(tmp_path):
         with pytest.raises(UserWarning, match="output.vtk_subdivision"):
             big.write(stepper.mesh, {"z": stepper.z}, 0.0)
     assert not big.entries
+
+
+def _symmetric(eigenvalues, seed):
+    rng = np.random.default_rng(seed)
+    q, _ = np.linalg.qr(rng.standard_normal((len(eigenvalues),) * 2))
+    return q @ np.diag(eigenvalues) @ q.T
+
+
+@pytest.mark.parametrize("kind", ["amor", "miehe"])
+@pytest.mark.parametrize("eigenvalues", [(-0.01, -0.02), (0.01, -0.02), (0.03, 0.01),
+                                         (-0.01, -0.02, -0.005), (0.01, -0.02, -0.005),
+                                         (0.01, 0.02, -0.005), (0.01, 0.02, 0.005)])
+def test_split_stresses_are_the_derivatives_of_the_split_densities(kind, eigenvalues):
+    """sigma+- in closed form against NGSolve's symbolic derivative of psi+- (every count of
+    positive principal strains, 2D and 3D)."""
+    import ngsolve as ngs
+    from netgen.csg import unit_cube
+    from netgen.geom2d import unit_square
+
+    from ngfrac.fields import split_stresses
+    from ngfrac.splits import EnergySplit
+
+    dim = len(eigenvalues)
+    strain = _symmetric(eigenvalues, seed=7)  # a rotation that mixes all entries
+    geometry = unit_square if dim == 2 else unit_cube
+    mesh = ngs.Mesh(geometry.GenerateMesh(maxh=1.0))
+    e = ngs.CF(tuple(strain.ravel()), dims=(dim, dim))
+    split = EnergySplit(kind, LAM, MU, dim, bulk_dim=3)
+    point = mesh(*([0.3] * dim))
+    for closed, density in zip(split_stresses(split, e), (split.psi_plus(e), split.psi_minus(e))):
+        derivative = np.array(density.Diff(e)(point)).reshape(dim, dim)
+        # the density may use e_xy and e_yx unevenly: its symmetric part is the stress
+        np.testing.assert_allclose(np.array(closed(point)).reshape(dim, dim),
+                                   0.5 * (derivative + derivative.T), rtol=1e-9, atol=1e-15)
+
+
+def test_3d_stress_von_mises_principal(tmp_path):
+    grad_u = np.array([[0.01, 0.002, 0.0], [0.003, -0.02, 0.001], [0.0, 0.004, 0.005]])
+    faces = ("left", "right", "bottom", "top", "back", "front")
+    scene = Scene.from_dict({
+        "name": "uniform3d", "model": {"kind": "elasticity_3d"},
+        "material": {"lam": LAM, "mu": MU},
+        "phase_field": {"epsilon": 0.1, "alpha2": 1e-3, "residual_stiffness": ETA},
+        "geometry": {"kind": "box", "width": 1.0, "height": 1.0, "depth": 0.5, "mesh_size": 0.5},
+        "loads": [{"boundary": face, "value": [" + ".join(f"{grad_u[i, j]}*{x}" for j, x in
+                                                         enumerate("xyz")) for i in range(3)]}
+                  for face in faces],
+        "time": {"dt": 0.01, "t_end": 0.01}, "output": {"vtk_every": 0},
+        "discretization": {"order": 1}})
+    _, mesh = _snapshot(tmp_path, scene)
+    data, n = mesh.point_data, len(mesh.points)
+    e = 0.5 * (grad_u + grad_u.T)
+    sigma = (1 + ETA) * (2 * MU * e + LAM * np.trace(e) * np.eye(3))
+    expected = [sigma[0, 0], sigma[1, 1], sigma[2, 2], sigma[0, 1], sigma[1, 2], sigma[0, 2]]
+    np.testing.assert_allclose(data["stress"], np.tile(expected, (n, 1)), rtol=RTOL, atol=1e-14)
+    np.testing.assert_allclose(data["principal_stress"],
+                               np.tile(np.sort(np.linalg.eigvalsh(sigma))[::-1], (n, 1)),
+                               rtol=1e-7)  # the trigonometric formula: ~1e-9 relative measured
+    deviator = sigma - np.trace(sigma) / 3 * np.eye(3)
+    np.testing.assert_allclose(data["von_mises"].ravel(), np.sqrt(1.5 * np.sum(deviator ** 2)),
+                               rtol=RTOL)
