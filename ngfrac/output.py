@@ -120,6 +120,7 @@ class VTKSeries:
         self.subdivision = subdivision
         self.stem = stem
         self.entries: list[tuple[float, str]] = []
+        self._warned = False
         folder.mkdir(parents=True, exist_ok=True)
 
     def resume(self, t: float) -> None:
@@ -151,11 +152,12 @@ class VTKSeries:
     def write(self, mesh: ngs.Mesh, fields: dict[str, Any], t: float) -> Path:
         """Write one snapshot of the named CoefficientFunctions on ``mesh`` at time ``t``.
 
-        Warns (a UserWarning naming ``output.vtk_subdivision``) before writing a file that
-        :meth:`estimate_bytes` puts above :data:`LARGE_SNAPSHOT` bytes.
+        Warns (a UserWarning naming ``output.vtk_subdivision``, once per series) before
+        writing a file that :meth:`estimate_bytes` puts above :data:`LARGE_SNAPSHOT` bytes.
         """
         size = self.estimate_bytes(mesh, sum(cf.dim for cf in fields.values()))
-        if size > LARGE_SNAPSHOT:
+        if size > LARGE_SNAPSHOT and not self._warned:
+            self._warned = True  # once per series: adaptive meshes change the size every time
             warnings.warn(f"a VTK snapshot of {mesh.ne} elements at subdivision "
                           f"{self.subdivision} will take about {size / 1e6:.0f} MB per file; "
                           "lower output.vtk_subdivision (each step down divides it by ~4 in 2D, "

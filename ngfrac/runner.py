@@ -2,7 +2,8 @@
 
 A run folder holds ``scene.toml`` (the resolved scene), ``history.csv``, ``vtk/`` (a ``.pvd``
 series), ``results.h5`` (history and field snapshots with their meshes), ``checkpoint.h5``
-(written atomically every ``output.checkpoint_every`` steps) and the plots. ``restart=True``
+(written atomically every ``output.checkpoint_every`` steps), ``results.xdmf``,
+``crack_path.csv`` (tip track and final ridge of z) and the plots. ``restart=True``
 continues a folder from its checkpoint: rows and snapshots written after the checkpoint are
 dropped, so the continued history equals an uninterrupted one.
 """

@@ -185,3 +185,17 @@ def test_3d_stress_von_mises_principal(tmp_path):
     deviator = sigma - np.trace(sigma) / 3 * np.eye(3)
     np.testing.assert_allclose(data["von_mises"].ravel(), np.sqrt(1.5 * np.sum(deviator ** 2)),
                                rtol=RTOL)
+
+
+def test_size_warning_once_per_series(tmp_path, monkeypatch):
+    import ngfrac.output
+
+    monkeypatch.setattr(ngfrac.output, "LARGE_SNAPSHOT", 1000)  # every snapshot is "large"
+    stepper = PhaseFieldStepper(_uniform_scene("mode3"))
+    series = VTKSeries(tmp_path, 0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        write_snapshot(series, stepper)
+        write_snapshot(series, stepper)
+    sizes = [w for w in caught if "output.vtk_subdivision" in str(w.message)]
+    assert len(sizes) == 1 and len(series.entries) == 2
