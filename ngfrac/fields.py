@@ -53,9 +53,7 @@ def degraded_stress(model: Any, split: EnergySplit | None, u: Any, z: Any, eta: 
     ``g(z) sigma[u]`` without a split, ``g(z) sigma+ + sigma-`` with one
     (:func:`split_stresses`).
     """
-    if model.n_components == 1:
-        return degradation(z, eta) * model.mu * ngs.grad(u)
-    if split is None:
+    if split is None:  # mode III: model.stress is the shear stress vector
         return degradation(z, eta) * model.stress(u)
     plus, minus = split_stresses(split, ngs.Sym(ngs.grad(u)))
     return degradation(z, eta) * plus + minus
