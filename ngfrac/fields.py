@@ -5,9 +5,10 @@ All of them are what the stepper itself uses, with the degradation g(z) = (1-z)^
 
 - ``energy_density``: the integrand of E_el, ``1/2 g(z) sigma[u]:e[u]``; with a split
   ``g(z) psi+ + psi-`` (:mod:`ngfrac.splits`);
-- ``stress``: the degraded stress dW/de of that density (with a split g(z) sigma+ + sigma-). Mode III: the shear stress vector
-  ``g(z) mu grad u`` = (sigma_xz, sigma_yz); plane models: (sigma_xx, sigma_yy, sigma_xy); 3D:
-  (xx, yy, zz, xy, yz, xz), the order VTK reads as a symmetric tensor;
+- ``stress``: the degraded stress dW/de of that density (with a split g(z) sigma+ + sigma-).
+  Mode III: the shear stress vector ``g(z) mu grad u`` = (sigma_xz, sigma_yz); plane models:
+  (sigma_xx, sigma_yy, sigma_xy); 3D: (xx, yy, zz, xy, yz, xz), the order VTK reads as a
+  symmetric tensor;
 - ``von_mises`` and ``principal_stress`` (largest first; plane strain includes sigma_zz =
   nu (sigma_xx + sigma_yy), exact without a split, plane stress sigma_zz = 0); with the 3D
   spectral split all three come from the stress projected per element (:func:`projected`);
@@ -29,8 +30,8 @@ if TYPE_CHECKING:
     from .stepper import PhaseFieldStepper
 
 __all__ = ["degradation", "elastic_energy_density", "degraded_stress", "split_stresses",
-           "stress_components",
-           "von_mises", "principal_stresses", "projected", "piecewise_constant", "snapshot_fields"]
+           "stress_components", "von_mises", "principal_stresses", "projected",
+           "piecewise_constant", "snapshot_fields"]
 
 
 def degradation(z: Any, eta: float) -> Any:
