@@ -1,17 +1,40 @@
 """What the demo scripts share: run a scene through the API, keep its stepper, measure the
-crack path, plot a force-displacement curve, and say what the crack did."""
+crack path, plot a force-displacement curve, write JSON results, and say what the crack did."""
 from __future__ import annotations
 
+import json
 import math
 import sys
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
 from ngfrac.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
-from ngfrac.plotting import read_history
+from ngfrac.plotting import new_figure, read_history
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays as Python numbers and lists, and NaN or
+    infinity as None (JSON has no NaN: ``json.dumps`` would write a bare ``NaN``)."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
+def write_json(path: Path, data: Any) -> Path:
+    """Write ``data`` as strict JSON (NaN and infinity as null, see :func:`json_safe`)."""
+    path.write_text(json.dumps(json_safe(data), indent=1, allow_nan=False) + "\n")
+    return path
 
 
 def run_and_report(scene_file: Path, out_dir: str | Path, overrides: Sequence[str] = (),
@@ -69,13 +92,9 @@ def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: 
                             label: tuple[str, str], estimate: tuple[float, float] | None = None,
                             curve: str = "phase field") -> Path:
     """The force-displacement curve with its peak marked (and an LEFM estimate, when given)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     peak = int(np.argmax(force))
-    fig, ax = plt.subplots(figsize=(6, 4.2), constrained_layout=True)
+    fig = new_figure(figsize=(6, 4.2), constrained_layout=True)
+    ax = fig.subplots()
     ax.plot(u, force, "-", lw=1.5, label=curve)
     ax.plot(u[peak], force[peak], "o", color="C3",
             label=f"peak {force[peak]:.3f} kN at {u[peak]:.3g} mm")
@@ -85,5 +104,4 @@ def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: 
     ax.grid(alpha=0.3)
     ax.legend()
     fig.savefig(png, dpi=120)
-    plt.close(fig)
     return png

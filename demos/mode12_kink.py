@@ -37,7 +37,6 @@ there, which is why this demo uses the taller strip.
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Callable, Sequence
@@ -48,7 +47,8 @@ from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
 from ngfrac.crackpath import sharp_crack_solution
 from ngfrac.plotting import read_history
 
-from _common import command_line, measure_kink_both_ways, run_keeping_stepper  # demos/_common.py
+from _common import (command_line, measure_kink_both_ways, run_keeping_stepper,  # demos/_common.py
+                     write_json)
 
 SCENE = Path(__file__).with_suffix(".toml")
 
@@ -90,7 +90,7 @@ def main(out_dir: str | Path = "out/mode12_kink", overrides: Sequence[str] = (),
           f"tip; from the tip history {from_history:.1f} deg); path:\n{path.text(every=2)}")
     result = {**prediction, "measured_deg": measured, "measured_history_deg": from_history,
               "rmin": rmin, "rmax": rmax, "path": path.points.tolist()}
-    (Path(out_dir) / "kink.json").write_text(json.dumps(result, indent=1))
+    write_json(Path(out_dir) / "kink.json", result)
     print(f"wall time {summary.last.wall_s:.1f} s; results in {out_dir}")
     return summary
 

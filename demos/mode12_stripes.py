@@ -25,7 +25,6 @@ and turns by -22.4 degrees. Here:
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Callable, Sequence
@@ -36,7 +35,8 @@ from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
 from ngfrac.crackpath import sharp_crack_solution
 from ngfrac.plotting import read_history
 
-from _common import command_line, measure_kink_both_ways, run_keeping_stepper  # demos/_common.py
+from _common import (command_line, measure_kink_both_ways, run_keeping_stepper,  # demos/_common.py
+                     write_json)
 
 SCENE = Path(__file__).with_suffix(".toml")
 MEAN_GAMMA = 0.5
@@ -81,7 +81,7 @@ def main(out_dir: str | Path = "out/mode12_stripes", overrides: Sequence[str] = 
     result = {**prediction, "onset_t": onset, "measured_deg": measured,
               "measured_history_deg": from_history, "rmin": rmin, "rmax": rmax,
               "path": path.points.tolist()}
-    (Path(out_dir) / "kink.json").write_text(json.dumps(result, indent=1))
+    write_json(Path(out_dir) / "kink.json", result)
     print(f"wall time {summary.last.wall_s:.1f} s; results in {out_dir}")
     return summary
 

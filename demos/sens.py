@@ -28,7 +28,6 @@ u = 0.0102 mm.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -38,7 +37,8 @@ from ngfrac import PhaseFieldStepper, RunSummary, load_scene
 from ngfrac.crackpath import griffith_onset, history_path, initial_tip, measure_kink
 from ngfrac.plotting import read_history
 
-from _common import command_line, plot_force_displacement, run_keeping_stepper  # demos/_common.py
+from _common import (command_line, plot_force_displacement, run_keeping_stepper,  # demos/_common.py
+                     write_json)
 
 SCENE = Path(__file__).with_suffix(".toml")
 
@@ -70,7 +70,7 @@ def main(out_dir: str | Path = "out/sens", overrides: Sequence[str] = (),
               "lefm": {k: float(v) for k, v in estimate.items()},
               "path": [] if path is None else path.points.tolist(),
               "tip_track": track.points.tolist()}
-    (out / "path.json").write_text(json.dumps(result, indent=1))
+    write_json(out / "path.json", result)
     lowest = track.points[:, 1].min() if len(track.points) else origin[1]
     print(f"{scene.name}: peak force {force[peak]:.4f} kN at u = {u[peak]:.4g} mm; force at the "
           f"end {force[-1]:.4f} kN; crack direction {angle:.1f} deg over {eps:g}..{6 * eps:g} mm "

@@ -36,7 +36,6 @@ single steps after a change jumped by up to +27 %.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -46,7 +45,7 @@ from ngfrac import PhaseFieldStepper, RunSummary, load_scene, run_scene
 from ngfrac.crackpath import griffith_onset
 from ngfrac.plotting import read_history
 
-from _common import command_line, plot_force_displacement  # demos/_common.py
+from _common import command_line, plot_force_displacement, write_json  # demos/_common.py
 
 SCENE = Path(__file__).with_suffix(".toml")
 
@@ -67,7 +66,7 @@ def main(out_dir: str | Path = "out/sent", overrides: Sequence[str] = (),
     result = {"peak_force_kN": float(force[peak]), "u_at_peak_mm": float(u[peak]),
               "final_force_kN": float(force[-1]), "epsilon": eps,
               "lefm": {k: float(v) for k, v in estimate.items()}}
-    (out / "peak.json").write_text(json.dumps(result, indent=1))
+    write_json(out / "peak.json", result)
     print(f"{scene.name}: peak force {force[peak]:.4f} kN at u = {u[peak]:.4g} mm "
           f"(LEFM start of growth {estimate['F_c']:.3f}-{estimate['F_c_eff']:.3f} kN at "
           f"{estimate['t_c']:.3g}-{estimate['t_c_eff']:.3g} mm for gamma .. gamma_eff); "

@@ -43,6 +43,22 @@ LANE_SPREAD = 0.27
 """The tip lane widens by this much per unit length ahead of the tip (tan 15 deg)."""
 
 
+
+def z_indicators(scene: Scene, z: ngs.GridFunction) -> np.ndarray:
+    """The scene's error indicator (``adaptivity.estimator``) for z, one value per element.
+
+    ZZ gradient recovery, or the robust residual estimator of eps div(gamma grad z) =
+    gamma z / eps; no knowledge of fracture. Changes nothing (the VTK snapshots call it too).
+    """
+    pf = scene.phase_field
+    gamma = scene.material.gamma
+    if scene.adaptivity.estimator == "zz":
+        return np.asarray(estimators.zz_estimator(z))
+    g = gamma.value() if gamma.is_constant else gamma.to_coefficient()
+    return np.asarray(estimators.residual_estimator(z, diffusion=pf.epsilon * g,
+                                                    reaction=g / pf.epsilon, source=0.0,
+                                                    scaling="robust"))
+
 @dataclass(frozen=True)
 class AdaptivitySizes:
     """The resolved lengths of the adaptivity section (zeros replaced by their defaults).
@@ -149,17 +165,10 @@ class MeshAdapter:
                 and self._at_boundary(self.last_tip))
 
     def estimate(self, z: ngs.GridFunction) -> np.ndarray:
-        """Error indicator per element for z (no knowledge of fracture in the estimator)."""
-        pf = self.scene.phase_field
-        gamma = self.scene.material.gamma
-        if self.settings.estimator == "zz":
-            eta = estimators.zz_estimator(z)
-        else:
-            g = gamma.value() if gamma.is_constant else gamma.to_coefficient()
-            eta = estimators.residual_estimator(z, diffusion=pf.epsilon * g, reaction=g / pf.epsilon,
-                                                source=0.0, scaling="robust")
-        self.eta_total = float(np.sqrt(np.sum(np.asarray(eta) ** 2)))
-        return np.asarray(eta)
+        """Error indicator per element for z (:func:`z_indicators`); sets :attr:`eta_total`."""
+        eta = z_indicators(self.scene, z)
+        self.eta_total = float(np.sqrt(np.sum(eta ** 2)))
+        return eta
 
     def element_sizes(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z: ngs.GridFunction,
                       eta: np.ndarray, tip: np.ndarray | None) -> np.ndarray:

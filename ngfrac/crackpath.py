@@ -30,7 +30,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["CrackPath", "initial_tip", "ridge_path", "history_path", "fit_direction",
+__all__ = ["CrackPath", "initial_tip", "ridge_path", "connected_part", "final_ridge",
+           "crack_path_rows", "history_path", "fit_direction",
            "kink_angle", "stress_intensity_from_jump", "mts_kink_angle", "measure_kink",
            "deviation_from_line", "slit_mesh", "SharpCrack", "sharp_crack_solution",
            "griffith_onset"]
@@ -128,6 +129,62 @@ def ridge_path(mesh, z, origin: Sequence[float], reference: Sequence[float],
                 phi += 0.5 * step * (left - right) / curvature
         found.append((origin[0] + r * math.cos(phi), origin[1] + r * math.sin(phi)))
     return CrackPath(origin, reference, np.array(found, dtype=float).reshape(-1, 2))
+
+
+def connected_part(path: CrackPath, max_jump: float) -> CrackPath:
+    """The path from its first point up to the first jump longer than ``max_jump`` (points
+    farther on belong to damage elsewhere, not to the crack that grew from the tip)."""
+    points = path.points
+    if len(points) == 0:
+        return path
+    gaps = np.linalg.norm(np.diff(np.vstack([path.origin, points]), axis=0), axis=1)
+    jumps = np.flatnonzero(gaps > max_jump)
+    end = int(jumps[0]) if len(jumps) else len(points)
+    return CrackPath(path.origin, path.reference, points[:end])
+
+
+def final_ridge(scene, mesh, z, level: float = 0.5) -> CrackPath | None:
+    """The ridge of z beyond the first initial crack's tip, as one connected polyline (2D).
+
+    Arcs every epsilon/2 from 2 epsilon (inside that the initial band's flanks reach
+    z = 1/2 on the arcs) to the farthest corner of the domain (:func:`ridge_path`), cut at the
+    first jump longer than 2 epsilon + the arc spacing (:func:`connected_part`). None for 3D
+    scenes and scenes without an initial crack.
+    """
+    if scene.geometry.dim != 2 or not scene.cracks:
+        return None
+    eps = scene.phase_field.epsilon
+    origin, reference = initial_tip(scene.cracks[0].points)
+    g = scene.geometry
+    corners = np.array([[x, y] for x in (g.origin[0], g.origin[0] + g.width)
+                        for y in (g.origin[1], g.origin[1] + g.height)])
+    reach = float(np.max(np.linalg.norm(corners - origin, axis=1)))
+    spacing = eps / 2
+    radii = np.arange(2 * eps, reach, spacing)
+    path = ridge_path(mesh, z, origin, reference, radii, level=level)
+    return connected_part(path, 2 * eps + spacing)
+
+
+def crack_path_rows(history: Mapping[str, np.ndarray], ridge: CrackPath | None, step: int,
+                    t: float) -> tuple[list[str], list[list[object]]]:
+    """The header and rows of ``crack_path.csv``: ``kind, step, t, x, y`` (3D: ``, z``).
+
+    ``kind = tip``: one row per history row with a tip (its step, t and tip position);
+    ``kind = ridge``: the points of ``ridge`` (the final ridge of z, :func:`final_ridge`), in
+    order from the initial tip, all with the last ``step`` and ``t``.
+    """
+    axes = [c for c in ("tip_x", "tip_y", "tip_z") if c in history]
+    header = ["kind", "step", "t"] + [c[-1] for c in axes]
+    tips = np.column_stack([history[c] for c in axes])
+    rows: list[list[object]] = []
+    for k, time_, point in zip(history["step"], history["t"], tips):
+        if np.all(np.isfinite(point)):
+            rows.append(["tip", int(k), float(time_), *map(float, point)])
+    if ridge is not None:
+        for point in ridge.points:
+            rows.append(["ridge", int(step), float(t), *map(float, point),
+                         *([math.nan] * (len(axes) - 2))])
+    return header, rows
 
 
 def history_path(history: Mapping[str, np.ndarray], origin: Sequence[float],

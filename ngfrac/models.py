@@ -68,6 +68,10 @@ class AntiPlane:
         """sigma[u]:e[u] (twice the elastic energy density of the sound material)."""
         return self.mu * ngs.InnerProduct(ngs.grad(u), ngs.grad(u))
 
+    def stress(self, u: Any) -> Any:
+        """The shear stress vector (sigma_xz, sigma_yz) = mu grad u of the sound material."""
+        return self.mu * ngs.grad(u)
+
     def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any:
         """One CoefficientFunction with each load's expression on its boundary."""
         return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t) for load in loads},

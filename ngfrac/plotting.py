@@ -1,19 +1,26 @@
-"""Figures of a run, drawn with matplotlib's file-only Agg backend (no GUI)."""
+"""Figures of a run, written to files without a GUI.
+
+Figures are ``matplotlib.figure.Figure`` objects saved through the Agg canvas; pyplot is never
+imported, so matplotlib's backend and pyplot's figures in the user's session stay as they are
+(and importing this module does not import matplotlib at all).
+"""
 from __future__ import annotations
 
 import csv
+import logging
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+log = logging.getLogger(__name__)
 
-def _pyplot():
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def new_figure(**kwargs: Any) -> Any:
+    """A matplotlib Figure that draws with Agg (PNG files), outside pyplot."""
+    from matplotlib.figure import Figure
 
-    return plt
+    return Figure(**kwargs)
 
 
 def read_history(path: str | Path) -> dict[str, np.ndarray]:
@@ -30,8 +37,8 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
 def plot_history(history_csv: str | Path, png: str | Path) -> Path:
     """Energies, crack length and tip position, and mesh size over time, in one figure."""
     h = read_history(history_csv)
-    plt = _pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7), constrained_layout=True)
+    fig = new_figure(figsize=(10, 7), constrained_layout=True)
+    axes = fig.subplots(2, 2)
     ax = axes[0, 0]
     for key in ("E_el", "E_surf", "E_total"):
         ax.plot(h["t"], h[key], label=key)
@@ -51,7 +58,6 @@ def plot_history(history_csv: str | Path, png: str | Path) -> Path:
     ax.plot(h["t"], h["nv"])
     ax.set(xlabel="t", ylabel="vertices", title="Number of vertices")
     fig.savefig(png, dpi=110)
-    plt.close(fig)
     return Path(png)
 
 
@@ -67,13 +73,13 @@ def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: 
         from .plotting3d import plot_phase_field_3d
 
         return plot_phase_field_3d(mesh, z_vertex_values, png, title=title, path=path)
-    plt = _pyplot()
     if isinstance(mesh, tuple):
         coords, triangles = np.asarray(mesh[0]), np.asarray(mesh[1])
     else:
         coords = np.array(mesh.ngmesh.Coordinates())
         triangles = mesh.ngmesh.Elements2D().NumPy()["nodes"][:, :3].astype(int) - 1
-    fig, ax = plt.subplots(figsize=(6, 5.2), constrained_layout=True)
+    fig = new_figure(figsize=(6, 5.2), constrained_layout=True)
+    ax = fig.subplots()
     image = ax.tripcolor(coords[:, 0], coords[:, 1], triangles, z_vertex_values,
                          shading="gouraud", cmap="inferno_r", vmin=0, vmax=1)
     if show_mesh:
@@ -85,7 +91,6 @@ def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: 
     ax.set_aspect("equal")
     ax.set(xlabel="x", ylabel="y", title=title)
     fig.savefig(png, dpi=130)
-    plt.close(fig)
     return Path(png)
 
 
@@ -99,14 +104,75 @@ def plot_force_displacement(history: dict[str, np.ndarray], png: str | Path) -> 
     curves = [(f, u) for f, u in curves if np.any(history[f] != 0)]
     if not curves:
         return None
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+    fig = new_figure(figsize=(6, 4.5), constrained_layout=True)
+    ax = fig.subplots()
     for force, displacement in curves:
         ax.plot(history[displacement], history[force], label=f"{force} against {displacement}")
     ax.set(xlabel="imposed displacement", ylabel="reaction force", title="Force-displacement")
     ax.legend()
     fig.savefig(png, dpi=110)
-    plt.close(fig)
+    return Path(png)
+
+
+def plot_mesh(coordinates: np.ndarray, cells: np.ndarray, png: str | Path, title: str = "",
+              facets: np.ndarray | None = None) -> Path:
+    """The elements of a mesh: triangles drawn in 2D; in 3D the boundary and crack faces
+    (``facets``, triangles) seen from above the front face.
+
+    Parameters
+    ----------
+    coordinates : (nv, 2 or 3) vertex coordinates
+    cells : (ne, 3) triangles (2D; vertex numbers from 0), or the tetrahedra in 3D (counted only)
+    facets : (nf, 3) boundary triangles, needed in 3D
+    """
+    coordinates, cells = np.asarray(coordinates), np.asarray(cells)
+    fig = new_figure(figsize=(6, 5.2), constrained_layout=True)
+    label = f"{len(coordinates)} vertices, {len(cells)} elements"
+    if coordinates.shape[1] == 2:
+        ax = fig.subplots()
+        ax.triplot(coordinates[:, 0], coordinates[:, 1], cells, color="0.2", lw=0.2)
+        ax.set_aspect("equal")
+        ax.set(xlabel="x", ylabel="y")
+    else:
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        ax = fig.add_subplot(projection="3d")
+        faces = coordinates[np.asarray(facets)]
+        ax.add_collection3d(Poly3DCollection(faces, facecolor="0.85", edgecolor="0.2",
+                                             linewidth=0.15))
+        lo, hi = coordinates.min(axis=0), coordinates.max(axis=0)
+        ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
+               xlabel="x", ylabel="y", zlabel="z")
+        ax.set_box_aspect(hi - lo)
+    ax.set_title(f"{title}\n{label}" if title else label)
+    fig.savefig(png, dpi=150)
+    return Path(png)
+
+
+def plot_tip_path(history: dict[str, np.ndarray], png: str | Path,
+                  domain: tuple[tuple[float, float], tuple[float, float]] | None = None,
+                  title: str = "") -> Path | None:
+    """The tip positions of a history (tip_x, tip_y) over the domain, colored by t.
+
+    ``domain`` is ((x0, y0), (width, height)), drawn as the outline (3D: the x-y projection).
+    Returns None when no row has a tip.
+    """
+    points = np.column_stack([history["tip_x"], history["tip_y"], history["t"]])
+    points = points[np.all(np.isfinite(points), axis=1)]
+    if not len(points):
+        return None
+    fig = new_figure(figsize=(6, 5.2), constrained_layout=True)
+    ax = fig.subplots()
+    if domain is not None:
+        (x0, y0), (width, height) = domain
+        ax.plot([x0, x0 + width, x0 + width, x0, x0], [y0, y0, y0 + height, y0 + height, y0],
+                color="0.3", lw=1)
+    ax.plot(points[:, 0], points[:, 1], color="0.7", lw=0.6, zorder=1)
+    dots = ax.scatter(points[:, 0], points[:, 1], c=points[:, 2], s=8, cmap="viridis", zorder=2)
+    fig.colorbar(dots, ax=ax, label="t")
+    ax.set_aspect("equal")
+    ax.set(xlabel="x", ylabel="y", title=title or "tip path")
+    fig.savefig(png, dpi=130)
     return Path(png)
 
 
@@ -127,10 +193,23 @@ def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]
     if fd is not None:
         written.append(fd)
     results_file = folder / "results.h5"
-    if results_file.exists():
-        results = open_results(results_file)
+    results = open_results(results_file) if results_file.exists() else None
+    domain = None
+    if results is not None:
+        g = results.scene.geometry
+        domain = ((g.origin[0], g.origin[1]), (g.width, g.height))
+    tips = plot_tip_path(history, out / "tip_path.png", domain)
+    if tips is not None:
+        written.append(tips)
+    if results is None:
+        log.info("%s has no results.h5: no mesh or phase-field pictures", folder)
+    else:
         available = results.snapshot_times()
         if len(available):
+            last = results.snapshot(-1)
+            written.append(plot_mesh(last.mesh_arrays.coordinates, last.mesh_arrays.cells,
+                                     out / "mesh.png", f"mesh at t = {last.t:.4g}",
+                                     facets=last.mesh_arrays.facets))
             chosen = times if times else sorted({available[0], available[len(available) // 2], available[-1]})
             tips = np.c_[history["tip_x"], history["tip_y"]]
             for t in chosen:

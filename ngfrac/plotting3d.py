@@ -39,10 +39,7 @@ def plot_phase_field_3d(mesh: ngs.Mesh, z_vertex_values: np.ndarray, png: str | 
     n : int
         Samples along the longest side.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plotting import new_figure
 
     coords = np.array(mesh.ngmesh.Coordinates())
     lo, hi = coords.min(axis=0), coords.max(axis=0)
@@ -57,7 +54,8 @@ def plot_phase_field_3d(mesh: ngs.Mesh, z_vertex_values: np.ndarray, png: str | 
     cube = sample_vertex_field(mesh, z_vertex_values, np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]))
     through = np.nanmax(cube.reshape(X.shape), axis=1)  # (x, z)
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
+    fig = new_figure(figsize=(11, 4.8), constrained_layout=True)
+    left, right = fig.subplots(1, 2)
     image = left.pcolormesh(axes[0], axes[1], slice_values.reshape(xs.shape).T, shading="gouraud",
                             cmap="inferno_r", vmin=0, vmax=1)
     left.set(xlabel="x", ylabel="y", title=f"z on the plane z = {middle:.3g}", aspect="equal")
@@ -73,5 +71,4 @@ def plot_phase_field_3d(mesh: ngs.Mesh, z_vertex_values: np.ndarray, png: str | 
     if title:
         fig.suptitle(title)
     fig.savefig(png, dpi=110)
-    plt.close(fig)
     return Path(png)

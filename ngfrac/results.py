@@ -13,6 +13,13 @@ Layout (``format_version`` 1)::
         mesh/              see :class:`MeshArrays` (a hard link to the previous snapshot's
                            mesh group when the mesh did not change)
         fields/u, fields/z dof vectors; attrs: space (NGSolve type), order, dim
+        vertex_values/u, /z the fields at the vertices, (nv,) or (nv, components), in the
+                           order of mesh/coordinates; attrs: units
+
+For readers without NGSolve, ``mesh/coordinates`` (nv, dim; attrs: units), ``mesh/cells``
+(triangles or tetrahedra, vertex numbers from 0) and ``vertex_values`` are all a snapshot
+needs (linear per cell); ``results.xdmf`` next to the file lists them for ParaView (XDMF
+reader) as a time series. Lengths are in the scene's units (:data:`LENGTH_UNIT`).
 
 Numeric datasets carry Fletcher-32 checksums, so damaged data raises :class:`ResultsError`
 instead of being read silently.
@@ -37,7 +44,7 @@ import netgen.meshing as ngm
 import ngsolve as ngs
 import numpy as np
 
-from .output import to_toml
+from .output import atomic_write_text, to_toml
 from .scene import Scene, SceneError
 
 if TYPE_CHECKING:
@@ -46,6 +53,10 @@ if TYPE_CHECKING:
 FORMAT = "ngfrac-results"
 FORMAT_VERSION = 1
 """Version of the layout written here; files from a newer version are refused."""
+
+LENGTH_UNIT = "scene units"
+"""The ``units`` attribute of coordinates and displacements: scenes have no unit key, so
+lengths are in whatever unit the scene's numbers are (the SENT/SENS demos: mm)."""
 
 
 class ResultsError(RuntimeError):
@@ -152,6 +163,7 @@ class MeshArrays:
         group.attrs["dim"] = self.dim
         for name in ("coordinates", "cells", "cell_index", "facets", "facet_index", "facet_domains"):
             group.create_dataset(name, data=getattr(self, name), fletcher32=True)
+        group["coordinates"].attrs["units"] = LENGTH_UNIT
         for name in ("materials", "boundaries"):
             group.create_dataset(name, data=list(getattr(self, name)), dtype=h5py.string_dtype())
 
@@ -260,6 +272,28 @@ class StoredField:
     def vertex_values(self, nv: int) -> np.ndarray | None:
         """Values at the vertices when the dofs hold them directly (scalar hierarchical H1)."""
         return self.values[:nv].copy() if self.kind == "h1ho" and self.dim == 1 else None
+
+
+def vertex_values(gf: ngs.GridFunction) -> np.ndarray:
+    """A GridFunction at the vertices of its mesh: (nv,) for a scalar, (nv, n) for a vector.
+
+    Hierarchical H1 spaces (NGSolve's H1 and VectorH1 of any order) hold the vertex values in
+    their first nv dofs (per component); other spaces are evaluated at the vertices.
+    """
+    mesh = gf.space.mesh
+    nv = mesh.nv
+    if gf.space.type == "h1ho":
+        return np.array(gf.vec.FV().NumPy()[:nv], dtype=np.float64)
+    if gf.space.type == "VectorH1" and all(c.space.type == "h1ho" for c in gf.components):
+        return np.column_stack([np.array(c.vec.FV().NumPy()[:nv], dtype=np.float64)
+                                for c in gf.components])
+    x = np.array(mesh.ngmesh.Coordinates())[:, :mesh.dim]
+    values = np.asarray(gf(mesh(*(x[:, i] for i in range(mesh.dim)))), dtype=np.float64)
+    return values.reshape(nv, -1).squeeze(axis=1) if gf.dim == 1 else values.reshape(nv, -1)
+
+
+FIELD_UNITS = {"u": LENGTH_UNIT, "z": "1"}
+"""The ``units`` attribute of the stored vertex values (other fields: "")."""
 
 
 # -- file checks ------------------------------------------------------------------------------
@@ -421,6 +455,7 @@ class ResultsWriter:
         f.create_group("snapshots")
         f.flush()
         self._attach(path, scene, f)
+        self.write_xdmf()  # an index of no snapshots yet: the file exists from the start
 
     def _attach(self, path: Path, scene: Scene, handle: h5py.File) -> None:
         self.path = path
@@ -461,6 +496,7 @@ class ResultsWriter:
         if stored_text != scene_text(scene):  # a longer time.t_end, other [output] keys
             writer.replace_scene(scene)
         f.flush()
+        writer.write_xdmf()
         return writer
 
     def replace_scene(self, scene: Scene) -> None:
@@ -538,10 +574,25 @@ class ResultsWriter:
                 arrays.write(group.create_group("mesh"))
             self._last_mesh = (arrays, group["mesh"].name)
             data = group.create_group("fields")
+            at_vertices = group.create_group("vertex_values")
             for field_name, gf in fields.items():
                 StoredField.of(gf).write(data, field_name)
+                dset = at_vertices.create_dataset(field_name, data=vertex_values(gf),
+                                                  fletcher32=True)
+                dset.attrs["units"] = FIELD_UNITS.get(field_name, "")
             self._file.flush()
+        self.write_xdmf()
         return name
+
+    @property
+    def xdmf_path(self) -> Path:
+        """``results.xdmf`` next to ``results.h5``."""
+        return self.path.with_suffix(".xdmf")
+
+    def write_xdmf(self) -> Path:
+        """(Re)write the XDMF index of the snapshots (ParaView's XDMF reader, meshio)."""
+        atomic_write_text(self.xdmf_path, xdmf_text(self._file, self.path.name))
+        return self.xdmf_path
 
     def _next_number(self) -> int:
         names = list(self._file["snapshots"])
@@ -556,6 +607,43 @@ class ResultsWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def xdmf_text(handle: h5py.File, h5_name: str) -> str:
+    """An XDMF 3 temporal collection of the snapshots in an open results file: per snapshot
+    the mesh (coordinates, cells) and every ``vertex_values`` dataset as node data."""
+    lines = ['<?xml version="1.0"?>', '<Xdmf Version="3.0">', "  <Domain>",
+             '    <Grid Name="snapshots" GridType="Collection" CollectionType="Temporal">']
+
+    def item(dset: h5py.Dataset, path: str) -> str:
+        kind, precision = ("Int", 4) if dset.dtype.kind == "i" else ("Float", 8)
+        dims = " ".join(str(n) for n in dset.shape)
+        return (f'          <DataItem Dimensions="{dims}" NumberType="{kind}" '
+                f'Precision="{precision}" Format="HDF">{h5_name}:{path}</DataItem>')
+
+    for name in sorted(handle["snapshots"]):
+        group = handle["snapshots"][name]
+        if "vertex_values" not in group:
+            continue  # written before vertex values were stored
+        mesh = group["mesh"]
+        cells, coordinates = mesh["cells"], mesh["coordinates"]
+        path = group.name
+        topology = "Triangle" if coordinates.shape[1] == 2 else "Tetrahedron"
+        lines += [f'      <Grid Name="{name}" GridType="Uniform">',
+                  f'        <Time Value="{float(group.attrs["t"])!r}"/>',
+                  f'        <Topology TopologyType="{topology}" NumberOfElements="{len(cells)}">',
+                  item(cells, f"{path}/mesh/cells"),
+                  "        </Topology>",
+                  f'        <Geometry GeometryType="{"XY" if coordinates.shape[1] == 2 else "XYZ"}">',
+                  item(coordinates, f"{path}/mesh/coordinates"),
+                  "        </Geometry>"]
+        for field_name, dset in group["vertex_values"].items():
+            kind = "Scalar" if dset.ndim == 1 else "Vector"
+            lines += [f'        <Attribute Name="{field_name}" AttributeType="{kind}" Center="Node">',
+                      item(dset, f"{path}/vertex_values/{field_name}"), "        </Attribute>"]
+        lines.append("      </Grid>")
+    lines += ["    </Grid>", "  </Domain>", "</Xdmf>", ""]
+    return "\n".join(lines)
 
 
 # -- reading ----------------------------------------------------------------------------------
@@ -582,13 +670,15 @@ class Snapshot:
     """The fields of one snapshot; the mesh is rebuilt on first use."""
 
     def __init__(self, path: Path, name: str, t: float, step: int, mesh: MeshArrays,
-                 stored: dict[str, StoredField]) -> None:
+                 stored: dict[str, StoredField],
+                 at_vertices: dict[str, np.ndarray] | None = None) -> None:
         self.path = path
         self.name = name
         self.t = t
         self.step = step
         self.mesh_arrays = mesh
         self._stored = stored
+        self._at_vertices = at_vertices or {}
 
     @property
     def field_names(self) -> list[str]:
@@ -622,7 +712,9 @@ class Snapshot:
         nv = self.mesh_arrays.nv
         values = {}
         for name, stored in self._stored.items():
-            direct = stored.vertex_values(nv)
+            direct = self._at_vertices.get(name)
+            if direct is None:
+                direct = stored.vertex_values(nv)
             if direct is None:
                 x = self.mesh_arrays.coordinates
                 points = self.mesh(*(x[:, i] for i in range(x.shape[1])))
@@ -676,7 +768,10 @@ class Results:
             group = f["snapshots"][name]
             mesh = MeshArrays.read(group["mesh"])
             stored = {field_name: StoredField.read(d) for field_name, d in group["fields"].items()}
-        return Snapshot(self.path, name, float(self._times[i]), int(self._steps[i]), mesh, stored)
+            at_vertices = ({field_name: d[()] for field_name, d in group["vertex_values"].items()}
+                           if "vertex_values" in group else {})
+        return Snapshot(self.path, name, float(self._times[i]), int(self._steps[i]), mesh, stored,
+                        at_vertices)
 
     def snapshot_at(self, t: float) -> Snapshot:
         """The snapshot nearest to time ``t``."""
@@ -694,5 +789,5 @@ def open_results(path: str | Path) -> Results:
     return Results(Path(path))
 
 
-__all__ = ["FORMAT_VERSION", "MeshArrays", "Results", "ResultsError", "ResultsWriter",
-           "Snapshot", "SnapshotArrays", "StoredField", "open_results"]
+__all__ = ["FORMAT_VERSION", "LENGTH_UNIT", "MeshArrays", "Results", "ResultsError", "ResultsWriter",
+           "Snapshot", "SnapshotArrays", "StoredField", "open_results", "vertex_values"]

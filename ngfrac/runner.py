@@ -4,7 +4,8 @@ A run folder holds ``scene.toml`` (the resolved scene), ``run.json`` (versions, 
 threads, command line, start time and the restarts), ``manifest.json`` (every file ngfrac
 wrote there), ``history.csv``, ``vtk/`` (a ``.pvd`` series), ``results.h5`` (history and field
 snapshots with their meshes), ``checkpoint.h5`` (written atomically every
-``output.checkpoint_every`` steps) and the plots. ``restart=True`` continues a folder from its
+``output.checkpoint_every`` steps), ``results.xdmf``, ``crack_path.csv`` (tip track and final
+ridge of z) and the plots. ``restart=True`` continues a folder from its
 checkpoint: rows and snapshots written after the checkpoint are dropped, so the continued
 history equals an uninterrupted one; a changed scene (``time.t_end``, ``[output]``) replaces
 ``scene.toml`` and the restart is appended to ``run.json``.
@@ -25,6 +26,8 @@ from typing import Any, Callable
 
 from .checkpoint import resume, save_checkpoint
 from .checks import ResolutionWarning, resolution_warnings
+from .crackpath import crack_path_rows, final_ridge
+from .fields import snapshot_fields
 from .output import (HistoryWriter, Manifest, OutputError, VTKSeries, atomic_write_text,
                      prepare_output_dir, read_run_json, run_metadata, to_toml, write_run_json)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -51,11 +54,22 @@ class RunSummary:
 
 
 def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
-    """One VTK snapshot of u, z and gamma."""
-    import ngsolve as ngs
+    """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.fields.snapshot_fields`
+    (energy density, stress, estimator, element size)."""
+    series.write(stepper.mesh, snapshot_fields(stepper), stepper.t)
 
-    gamma = stepper.gamma if not isinstance(stepper.gamma, float) else ngs.CoefficientFunction(stepper.gamma)
-    series.write(stepper.mesh, {"u": stepper.u, "z": stepper.z, "gamma": gamma}, stepper.t)
+
+def write_crack_path(out: Path, stepper: PhaseFieldStepper) -> Path:
+    """crack_path.csv: the tip track of history.csv and the final ridge of z (2D with an
+    initial crack; :func:`ngfrac.crackpath.crack_path_rows` has the layout)."""
+    history = read_history(out / "history.csv")
+    ridge = final_ridge(stepper.scene, stepper.mesh, stepper.z)
+    header, rows = crack_path_rows(history, ridge, stepper.k, stepper.t)
+    path = out / "crack_path.csv"
+    with HistoryWriter(path, header) as writer:
+        for row in rows:
+            writer.write(row)
+    return path
 
 
 def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
@@ -193,7 +207,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                 out / "history.csv", record.header(), resume_after=stepper.k if restart else None))
         results = None
         if output.results:
-            with manifest.writing("results.h5"):
+            with manifest.writing("results.h5", "results.xdmf"):
                 results = (ResultsWriter.resume(out / "results.h5", scene, stepper.k) if restart
                            else ResultsWriter(out / "results.h5", scene, overwrite=overwrite))
             stack.callback(results.close)
@@ -229,6 +243,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
                 on_record(record)
             if on_step is not None:
                 on_step(stepper)
+    with stepper.timer.phase("output: crack path"), manifest.writing("crack_path.csv"):
+        write_crack_path(out, stepper)
     if plots:
         with stepper.timer.phase("output: plots"), manifest.writing(*PLOTS):
             write_plots(out, stepper)

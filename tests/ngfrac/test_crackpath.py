@@ -6,8 +6,10 @@ import ngsolve as ngs
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.crackpath import (CrackPath, history_path, initial_tip, kink_angle, mts_kink_angle,
-                              ridge_path, sharp_crack_solution, stress_intensity_from_jump)
+from ngfrac.crackpath import (CrackPath, connected_part, crack_path_rows, deviation_from_line,
+                              final_ridge,
+                              history_path, initial_tip, kink_angle, mts_kink_angle, ridge_path,
+                              sharp_crack_solution, stress_intensity_from_jump)
 from ngfrac.scene import Scene
 
 
@@ -56,6 +58,55 @@ def test_ridge_path_skips_arcs_without_crack():
     assert path.points.shape == (0, 2)
     with pytest.raises(ValueError, match="did not grow"):
         kink_angle(path, 0.05, 0.1)
+
+
+def _slit_scene(eps=0.02):
+    return Scene.from_dict({
+        "model": {"kind": "mode3"}, "phase_field": {"epsilon": eps, "alpha2": 1e-3},
+        "geometry": {"width": 1.0, "height": 1.0}, "cracks": [{"points": [[0.0, 0.5], [0.5, 0.5]]}],
+        "loads": [{"boundary": "top", "value": "t"}], "time": {"dt": 0.01, "t_end": 0.01}})
+
+
+def test_final_ridge_follows_the_kink_and_leaves_out_stray_damage():
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.01))
+    eps = 0.02
+    kinked = kinked_crack_z(mesh, (0.5, 0.5), -30.0, eps)
+    # stray damage at the clamped corner (1, 1): z = 1 there, not connected to the crack
+    corner = ngs.exp(-ngs.sqrt((ngs.x - 1) ** 2 + (ngs.y - 1) ** 2) / eps)
+    z = ngs.GridFunction(kinked.space)
+    z.Set(ngs.IfPos(kinked - corner, kinked, corner))
+    ridge = final_ridge(_slit_scene(eps), mesh, z)
+    r = ridge.distances
+    # arcs every eps/2 from 2 eps until the ray leaves the square (x = 1 at r = 0.577); the
+    # corner's damage (r = 0.71 from the tip) is on later arcs, after a jump
+    assert r[0] == pytest.approx(2 * eps, abs=1e-9) and 0.55 < r[-1] < 0.6
+    assert np.all(np.diff(r) > 0)
+    # on the ray: the cusp of exp(-d/eps) is interpolated by P2 on h = 0.01, so the sampled
+    # maximum may sit a fraction of h off it (measured: at most 1.1e-3); the last arc passes
+    # beyond where the ray leaves the square and finds the edge's largest z (8e-3 off it)
+    deviation = np.abs(deviation_from_line(ridge, -30.0))
+    assert np.max(deviation[:-1]) < 2e-3 and deviation[-1] < eps / 2
+    assert np.all(np.linalg.norm(ridge.points - [1.0, 1.0], axis=1) > 0.4), "corner taken"
+
+
+def test_connected_part_stops_at_the_first_jump():
+    path = CrackPath(np.zeros(2), np.array([1.0, 0.0]),
+                     np.array([[0.1, 0.0], [0.2, 0.0], [0.7, 0.3], [0.8, 0.3]]))
+    np.testing.assert_array_equal(connected_part(path, 0.15).points, [[0.1, 0.0], [0.2, 0.0]])
+    assert len(connected_part(path, 1.0).points) == 4
+
+
+def test_crack_path_rows_layout():
+    history = {"step": np.array([0.0, 1.0, 2.0]), "t": np.array([0.0, 0.1, 0.2]),
+               "tip_x": np.array([0.5, np.nan, 0.6]), "tip_y": np.array([0.5, np.nan, 0.45])}
+    ridge = CrackPath(np.array([0.5, 0.5]), np.array([1.0, 0.0]), np.array([[0.55, 0.48]]))
+    header, rows = crack_path_rows(history, ridge, step=2, t=0.2)
+    assert header == ["kind", "step", "t", "x", "y"]
+    assert rows == [["tip", 0, 0.0, 0.5, 0.5], ["tip", 2, 0.2, 0.6, 0.45],
+                    ["ridge", 2, 0.2, 0.55, 0.48]]
+    header3, rows3 = crack_path_rows({**history, "tip_z": np.array([0.05, np.nan, 0.05])}, None, 2, 0.2)
+    assert header3 == ["kind", "step", "t", "x", "y", "z"] and len(rows3) == 2
+    assert final_ridge(Scene.from_dict({**_slit_scene().to_dict(), "cracks": []}), None, None) is None
 
 
 def test_history_path_leaves_out_jumps():
