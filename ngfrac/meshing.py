@@ -25,6 +25,9 @@ benchmark tests/ngfrac/test_meshing.py`` prints the numbers again):
   ``GetLocalH`` reports the requested values. Sizes below hmax therefore go to Netgen divided
   by :data:`SIZE_RATIO` = 1.3; then the median ratio is ~0.95 on a constant band and ~1.2 on
   the graded flanks, 95th percentile < 1.6.
+* Near the finest, graded sizes Netgen also leaves a few elements *below* the local h asked
+  (smallest longest edge 0.81-0.86 hmin); :class:`SizeFloor` learns that shortfall per run and
+  :func:`adapt_mesh` remeshes until no element is below ``hmin``.
 * Sampling: a point per element, or a lattice with spacing ~h where the carrying element is
   coarser than the requested h; sampling 2x denser changes the vertex count by < 3 %.
 * Vertex count: ``nv ~ c * int h^-2 dx`` over the *graded* requested field, c =
