@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import ngsolve as ngs
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from .meshing import ElementGeometry, edge_numbers
@@ -123,25 +123,26 @@ def crack_topology(points: np.ndarray, edges: np.ndarray, z: np.ndarray, *, spac
                                                             np.concatenate([b, a]))),
                        shape=(n, n)).tocsr()
     n_parts, labels = connected_components(graph, directed=False)
-    found = CrackTopology(0, 0, 0, np.zeros((0, points.shape[1])), [])
-    forks = []
+    ends = branch_points = 0
+    forks: list[np.ndarray] = []
+    lengths: list[float] = []
     for part in range(n_parts):
         members = np.flatnonzero(labels == part)
         sub = graph[members][:, members]
-        start = int(np.argmax(dijkstra(sub, indices=0)))
+        start = int(np.argmax(dijkstra(sub, indices=0)))  # one end of the crack
         distance = dijkstra(sub, indices=start)
         extent = float(distance.max())
         if extent < min_length:
             continue
-        ends, branch, where = _shape(sub, distance, points[inside[members]], spacing, min_length)
+        n_ends, n_branch, where = _shape(sub, distance, points[inside[members]], spacing, min_length)
+        ends, branch_points = ends + n_ends, branch_points + n_branch
         forks.extend(where)
-        found = CrackTopology(found.components + 1, found.branch_points + branch,
-                              found.endpoints + ends, found.forks, found.lengths + [extent])
-    return CrackTopology(found.components, found.branch_points, found.endpoints,
-                         np.array(forks).reshape(-1, points.shape[1]), found.lengths)
+        lengths.append(extent)
+    return CrackTopology(len(lengths), branch_points, ends,
+                         np.array(forks).reshape(-1, points.shape[1]), lengths)
 
 
-def _shape(graph, distance: np.ndarray, points: np.ndarray, spacing: float,
+def _shape(graph: csr_matrix, distance: np.ndarray, points: np.ndarray, spacing: float,
            min_length: float) -> tuple[int, int, list[np.ndarray]]:
     """Ends, branch points and fork positions of one crack from its Reeb graph."""
     shell = np.floor(distance / spacing).astype(int)
@@ -150,7 +151,7 @@ def _shape(graph, distance: np.ndarray, points: np.ndarray, spacing: float,
     within = coo_matrix((np.ones(int(same.sum())), (coo.row[same], coo.col[same])),
                         shape=graph.shape)
     _, piece = connected_components(within, directed=False)
-    # pieces of consecutive shells that share an edge: parent (shell k) -> child (shell k+1)
+    # pieces joined by an edge across shells: parent (shell k) -> child (a later shell)
     step = shell[coo.col] > shell[coo.row]
     links = set(zip(piece[coo.row[step]].tolist(), piece[coo.col[step]].tolist()))
     children: dict[int, list[int]] = {}
