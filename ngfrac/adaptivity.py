@@ -25,8 +25,8 @@ import estimators
 
 from .cracks import crack_direction
 from .geometry import _on_boundary, netgen_geometry
-from .meshing import (SIZE_RATIO, ElementGeometry, VertexDensity, adapt_mesh, edge_numbers,
-                      size_field_from_indicator)
+from .meshing import (SIZE_RATIO, ElementGeometry, SizeFloor, VertexDensity, adapt_mesh,
+                      edge_numbers, size_field_from_indicator)
 from .nodal import LagrangeNodes
 from .scene import Scene
 
@@ -143,6 +143,8 @@ class MeshAdapter:
         self.density = VertexDensity()
         """Netgen's vertex-count constant, learned from this run's meshes (one Netgen call
         per change instead of two)."""
+        self.floor = SizeFloor()
+        """What Netgen delivers at hmin, learned from this run's meshes: no element below hmin."""
         g = scene.geometry
         self._may_stop_at_boundary = (g.dim == 2 and bool(scene.cracks)
                                       and not self._at_boundary(np.array(scene.cracks[0].points[-1])))
@@ -280,14 +282,15 @@ class MeshAdapter:
         estimated = time.perf_counter()
         sizes = self.element_sizes(mesh, nodes, z, eta, tip if np.all(np.isfinite(tip)) else None)
         marked = time.perf_counter()
-        # Netgen gets sizes / SIZE_RATIO (it realizes graded fields coarser than asked); a
-        # floor of hmin * SIZE_RATIO keeps what it is asked for at or above hmin.
-        sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
         if mesh.dim == 3:  # 3D constants and Netgen options: ngfrac.meshing3d
             from .meshing3d import adapt_mesh_3d
+            # Netgen gets sizes / SIZE_RATIO: this floor asks it for nothing below hmin (3D
+            # meshes are not checked against hmin afterwards, unlike 2D)
+            sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
             adapt = partial(adapt_mesh_3d, density=self.density)
-        else:
-            adapt = partial(adapt_mesh, density=self.density)
+        else:  # hmin is a floor of the delivered mesh (SizeFloor)
+            adapt = partial(adapt_mesh, density=self.density, hmin=self.sizes.hmin,
+                            floor=self.floor)
         new = adapt(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
                     max_vertices=self.settings.max_vertices)
         done = time.perf_counter()

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ngfrac.branching import crack_topology_of
 from ngfrac.crackpath import history_path, kink_angle
 from ngfrac.plotting import read_history
 
@@ -47,6 +48,7 @@ class BoundsChecker:
         self.steps = 0
 
     def __call__(self, stepper):
+        self.stepper = stepper
         values = stepper.z_node_values()
         assert values.min() >= 0.0 and values.max() <= 1.0, (values.min(), values.max())
         if stepper.mesh is not self.mesh:  # a new mesh: transfers are checked in test_adaptive_run
@@ -66,6 +68,8 @@ def run_quick(name, tmp_path):
     for produced in ("history.csv", "history.png", "crack.png", "scene.toml", "vtk/fields.pvd"):
         assert (out / produced).exists(), produced
     read_back_independently(out)
+    if name in FINAL_CHECKS:
+        FINAL_CHECKS[name](checker.stepper)
     return read_history(out / "history.csv")
 
 
@@ -91,11 +95,34 @@ def check_slit(history):
     assert np.nanmax(np.abs(history["tip_y"] - 0.5)) < 0.1
 
 
+def stripes_gamma(x, y):
+    return 0.5 * (1 + 0.2 * np.sin(20 * (x + y)))
+
+
 def check_stripes(history):
-    # Fig. 4: the weak stripes draw the crack off the slit's straight line.
-    assert np.nanmax(history["tip_x"]) > 0.5
-    deviation = np.nanmax(np.abs(history["tip_y"] - 0.5))
-    assert deviation > 0.05, f"tip stayed within {deviation:.3f} of the slit's line"
+    # Fig. 4: the weak stripes draw the crack off the slit's straight line, into weaker
+    # material: gamma averaged over the tip track (0.4 <= gamma <= 0.6) is below its average
+    # along the straight line over the same x range. Measured: quick 0.457 against 0.487,
+    # full 0.464 against 0.496; 0.01 is a third of that gap (a straight crack has none).
+    assert np.nanmax(history["tip_x"]) > 0.97, np.nanmax(history["tip_x"])  # it crossed
+    track = np.unique(np.round(np.column_stack([history["tip_x"], history["tip_y"]]), 4), axis=0)
+    # the slit's tip and the far edge, where the tip moves along the edge, are not the path
+    track = track[np.isfinite(track).all(axis=1) & (track[:, 0] > 0.3) & (track[:, 0] < 0.97)]
+    along_track = stripes_gamma(track[:, 0], track[:, 1]).mean()
+    straight = stripes_gamma(np.linspace(track[:, 0].min(), track[:, 0].max(), 500), 0.5).mean()
+    assert along_track < straight - 0.01, (along_track, straight)
+
+
+def check_stripes_topology(stepper):
+    # The crack that follows the stripes stays one crack with two ends and no sub-branch
+    # (z >= 1/2, Reeb graph at a shell of 2 eps; ngfrac.branching): no parameters tried
+    # gave branching (docs/theory.md, "Fig. 4"); counts are integers, no tolerance.
+    found = crack_topology_of(stepper.z, spacing=2 * stepper.scene.phase_field.epsilon)
+    assert (found.components, found.endpoints, found.branch_points) == (1, 2, 0), found
+
+
+FINAL_CHECKS = {"mode3_stripes": check_stripes_topology}
+"""Checks of a demo's last state (its stepper), besides the history's."""
 
 
 def crack_angle(history, tip, rmin, rmax):

@@ -10,6 +10,7 @@ from ngfrac.cracks import crack_direction, distance_to_polylines, optimal_profil
 from ngfrac.geometry import build_mesh
 from ngfrac.meshing import ElementGeometry
 from ngfrac.nodal import LagrangeNodes
+from ngfrac.stepper import PhaseFieldStepper
 
 from scenes import quick_slit
 
@@ -115,3 +116,16 @@ def test_a_tip_that_reaches_the_boundary_between_changes_asks_for_one_last_mesh(
     assert adapter.reason == "tip reached the boundary"
     adapter.remember(mesh, nodes, values, np.array([1.0, 0.5]))
     assert adapter.tip_stopped
+
+
+def test_no_element_is_smaller_than_hmin_in_an_adaptive_run():
+    # hmin = h_crack = eps/10, so the floor binds in the core along the whole crack; asked
+    # for nothing below hmin, Netgen used to deliver 0.81-0.86 hmin there (SizeFloor).
+    # history's hmin column is the smallest longest edge of the step's mesh.
+    hmin = EPS / 10
+    scene = quick_slit("adaptivity.enabled=true", f"adaptivity.hmin={hmin}", "time.dt=2e-3",
+                       "time.t_end=0.1", "adaptivity.max_vertices=3000")
+    stepper = PhaseFieldStepper(scene)
+    smallest = [r.hmin for r in stepper.run()]
+    assert len(stepper.adaptations) >= 3
+    assert min(smallest) >= hmin, (min(smallest), hmin, stepper.adapter.floor)
