@@ -85,19 +85,10 @@ class Manifest:
     @classmethod
     def load(cls, folder: str | Path) -> "Manifest | None":
         """The manifest of ``folder``, or None when it has none."""
-        path = Path(folder) / MANIFEST
-        if not path.exists():
-            return None
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError) as err:
-            reason = _reason(err) if isinstance(err, OSError) else "not valid JSON"
-            raise OutputError(f"cannot read {str(path)!r} ({reason}); remove it by hand if "
-                              "the folder's files are yours") from None
-        if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
-            raise OutputError(f"{str(path)!r} was not written by ngfrac; rename it or choose "
-                              "another --out")
-        return cls(folder, [str(name) for name in data.get("files", [])])
+        data = _read_own_json(Path(folder) / MANIFEST, MANIFEST_FORMAT,
+                              "; remove it by hand if the folder's files are yours",
+                              "; rename it or choose another --out")
+        return None if data is None else cls(folder, [str(name) for name in data.get("files", [])])
 
     @classmethod
     def adopt(cls, folder: str | Path) -> "Manifest":
@@ -471,16 +462,22 @@ def run_metadata(argv: list[str] | None = None) -> dict[str, Any]:
 
 def read_run_json(folder: str | Path) -> dict[str, Any] | None:
     """The ``run.json`` of a run folder, or None when there is none."""
-    path = Path(folder) / RUN_JSON
+    return _read_own_json(Path(folder) / RUN_JSON, RUN_FORMAT)
+
+
+def _read_own_json(path: Path, fmt: str, unreadable_hint: str = "",
+                   foreign_hint: str = "") -> dict[str, Any] | None:
+    """A JSON file ngfrac wrote (its ``format`` is ``fmt``), None when missing; one-line
+    :class:`OutputError` when unreadable or not ngfrac's."""
     if not path.exists():
         return None
     try:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as err:
         reason = _reason(err) if isinstance(err, OSError) else "not valid JSON"
-        raise OutputError(f"cannot read {str(path)!r} ({reason})") from None
-    if not isinstance(data, dict) or data.get("format") != RUN_FORMAT:
-        raise OutputError(f"{str(path)!r} was not written by ngfrac")
+        raise OutputError(f"cannot read {str(path)!r} ({reason}){unreadable_hint}") from None
+    if not isinstance(data, dict) or data.get("format") != fmt:
+        raise OutputError(f"{str(path)!r} was not written by ngfrac{foreign_hint}")
     return data
 
 
