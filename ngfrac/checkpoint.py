@@ -15,8 +15,9 @@ Layout (``format_version`` 1)::
     /scene                 the resolved scene as TOML text; attrs: sha256
     /mesh/                 see MeshArrays
     /fields/u, u_prev, z   dof vectors (Fletcher-32 checksums); attrs: space, order, dim
-    /adapter/              attrs: eta_total, adaptations (JSON), vertex_density(_measured);
-                           datasets last_tip, achieved
+    /nucleus               with no initial crack: where z first reached 1/2 (once it has)
+    /adapter/              attrs: eta_total, adaptations (JSON), vertex_density(_measured),
+                           size_floor_ratio; datasets last_tip, achieved
 
 A checkpoint is refused for a scene that differs in a key other than :data:`IGNORED_KEYS`
 (``[output]`` and ``time.t_end``: a restart may write differently or run longer).
@@ -68,6 +69,8 @@ class CheckpointState:
     """Time as a count of time.dt (t = ticks * dt)."""
     level: int = 0
     """The adaptive step level (step = dt * 2**level)."""
+    nucleus: np.ndarray | None = None
+    """With no initial crack: where z first reached 1/2 (:attr:`PhaseFieldStepper.nucleus`)."""
 
     def build_mesh(self) -> ngs.Mesh:
         """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.results`)."""
@@ -97,6 +100,8 @@ def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
             group = f.create_group("fields")
             for name in FIELDS:
                 StoredField.of(getattr(stepper, name)).write(group, name)
+            if stepper.nucleus is not None:  # no initial crack: where the crack started
+                f.create_dataset("nucleus", data=np.asarray(stepper.nucleus, dtype=np.float64))
             _write_adapter(f, stepper)
         with open(tmp, "rb") as handle:  # the data must be on disk before the rename is
             os.fsync(handle.fileno())
@@ -138,6 +143,7 @@ def _write_adapter(f: h5py.File, stepper: "PhaseFieldStepper") -> None:
     # differently from the uninterrupted run
     group.attrs["vertex_density"] = float(adapter.density.value)
     group.attrs["vertex_density_measured"] = bool(adapter.density.measured)
+    group.attrs["size_floor_ratio"] = float(adapter.floor.ratio)  # learned like the density
     if adapter.last_tip is not None:
         group.create_dataset("last_tip", data=np.asarray(adapter.last_tip, dtype=np.float64))
     if adapter.achieved is not None:
@@ -165,6 +171,7 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
             mesh = MeshArrays.read(f["mesh"])
             fields = {name: StoredField.read(f["fields"][name]) for name in FIELDS}
             adapter = _read_adapter(f["adapter"]) if "adapter" in f else None
+            nucleus = f["nucleus"][()] if "nucleus" in f else None
     except ResultsError as err:  # raised by the mesh checks
         raise CheckpointError(f"checkpoint {str(path)!r}: {err}") from None
     # Compare the scenes, not stored hashes: a newer ngfrac may add keys with defaults.
@@ -175,7 +182,8 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
                               "restart with the scene it was written for")
     if k < 0 or not math.isfinite(t):
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt (step {k}, time {t})")
-    return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter, ticks, level)
+    return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter, ticks, level,
+                           nucleus)
 
 
 def _read_adapter(group: h5py.Group) -> dict[str, Any]:
@@ -183,6 +191,7 @@ def _read_adapter(group: h5py.Group) -> dict[str, Any]:
             "last_tip": group["last_tip"][()] if "last_tip" in group else None,
             "achieved": tuple(float(v) for v in group["achieved"][()]) if "achieved" in group else None,
             "adaptations": json.loads(str(group.attrs["adaptations"])),
+            "size_floor_ratio": float(group.attrs.get("size_floor_ratio", 1.0)),
             "vertex_density": (float(group.attrs["vertex_density"]),
                                bool(group.attrs["vertex_density_measured"]))
             if "vertex_density" in group.attrs else None}
@@ -212,6 +221,7 @@ def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
     stepper.ticks = state.ticks
     stepper.level = state.level
     stepper.time.Set(stepper.t)
+    stepper.nucleus = None if state.nucleus is None else np.array(state.nucleus)
     _restore_adapter(stepper, state)
 
 
@@ -228,6 +238,7 @@ def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> No
     adapter.achieved = saved["achieved"]
     if saved.get("vertex_density") is not None:  # absent in older checkpoints
         adapter.density.value, adapter.density.measured = saved["vertex_density"]
+    adapter.floor.ratio = saved.get("size_floor_ratio", 1.0)
     if saved["adaptations"]:
         from .adaptivity import Adaptation
         stepper.adaptations = [Adaptation(**record) for record in saved["adaptations"]]

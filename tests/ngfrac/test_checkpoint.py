@@ -132,27 +132,32 @@ def test_restart_after_a_mesh_change(tmp_path):
 
 def test_adaptivity_state_round_trip(scene, reference, tmp_path):
     """What decides the next mesh change (last tip, achieved sizes, eta, the learned vertex
-    constant) is restored."""
+    constant and size floor) and where a crack without an initial one started are restored."""
     from types import SimpleNamespace
 
-    from ngfrac.meshing import VertexDensity
+    from ngfrac.meshing import SizeFloor, VertexDensity
 
-    def with_adapter(stepper, tip, achieved, eta, density=None):
+    def with_adapter(stepper, tip, achieved, eta, density=None, floor=None):
         stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta,
-                                          density=density or VertexDensity())
+                                          density=density or VertexDensity(),
+                                          floor=floor or SizeFloor())
         stepper.adaptations = []
         return stepper
 
     state = load_checkpoint(reference[1], scene)
     source = PhaseFieldStepper(scene, mesh=state.build_mesh())
     restore(source, state)
-    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125, VertexDensity(1.37, True))
+    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125, VertexDensity(1.37, True),
+                 SizeFloor(0.83))
+    source.nucleus = np.array([0.25, 0.75])
     save_checkpoint(source, tmp_path / "adaptive.h5")
     target = with_adapter(PhaseFieldStepper(scene, mesh=state.build_mesh()), None, None, np.nan)
     restore(target, load_checkpoint(tmp_path / "adaptive.h5", scene))
     np.testing.assert_array_equal(target.adapter.last_tip, [0.31, 0.5])
     assert target.adapter.achieved == (0.01, 0.004) and target.adapter.eta_total == 0.125
     assert (target.adapter.density.value, target.adapter.density.measured) == (1.37, True)
+    assert target.adapter.floor.ratio == 0.83
+    np.testing.assert_array_equal(target.nucleus, [0.25, 0.75])
     with pytest.raises(CheckpointError, match="disagree on whether the mesh adapts"):
         restore(PhaseFieldStepper(scene, mesh=state.build_mesh()),
                 load_checkpoint(tmp_path / "adaptive.h5", scene))
