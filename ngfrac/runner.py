@@ -110,10 +110,11 @@ def run_info(scene: Scene) -> dict[str, Any]:
     """The ``run.json`` data of a new run of ``scene`` (also results.h5's root attributes).
 
     :func:`~ngfrac.output.run_metadata` (versions, git commit, threads, command line, start
-    time), the scene's name and an empty ``restarts`` list; fields derived from the scene
-    belong here too.
+    time), the scene's name, its resolution warnings (``resolution_warnings``, a list of
+    lines, empty when the scene resolves its crack) and an empty ``restarts`` list.
     """
-    return {"scene": scene.name, **run_metadata(), "restarts": []}
+    return {"scene": scene.name, **run_metadata(),
+            "resolution_warnings": resolution_warnings(scene), "restarts": []}
 
 
 def _flat_keys(data: Any, prefix: str = "") -> dict[str, Any]:

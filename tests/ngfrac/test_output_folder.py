@@ -132,12 +132,16 @@ def test_run_json_records_the_environment(base_run):
     age = datetime.datetime.now(datetime.timezone.utc) - started
     assert datetime.timedelta(0) <= age < datetime.timedelta(hours=1)
     assert info["restarts"] == []
+    from ngfrac import load_scene, resolution_warnings
+    overrides = [value for flag, value in zip(TINY[:-1], TINY[1:]) if flag == "--set"]
+    assert info["resolution_warnings"] == resolution_warnings(load_scene(SLIT, overrides))
     commit, dirty = git_revision()
     assert (info["git_commit"], info["git_dirty"]) == (commit, dirty)
     with h5py.File(base_run / "results.h5", "r") as f:
         assert f.attrs["format"] == "ngfrac-results"  # not replaced by run.json's marker
         for key in ("ngfrac_version", "ngsolve_version", "python_version", "started", "threads"):
             assert f.attrs[key] == info[key], key
+        assert json.loads(f.attrs["resolution_warnings"]) == info["resolution_warnings"]
         assert json.loads(f.attrs["command_line"]) == info["command_line"]
 
 
@@ -300,3 +304,18 @@ def test_plot_of_a_missing_folder(tmp_path):
     assert_one_line_error(ngfrac("plot", tmp_path / "nowhere"), "does not exist")
     (tmp_path / "empty").mkdir()
     assert_one_line_error(ngfrac("plot", tmp_path / "empty"), "not a run folder")
+
+
+def test_resolution_warnings_are_recorded_in_the_run_folder(tmp_path):
+    """A vertex cap far below what the sizes need: the warning goes to stderr, run.json and
+    results.h5 (the run itself goes on)."""
+    out = tmp_path / "coarse"
+    result = ngfrac("run", SLIT, "--out", out, *TINY[:-1], "--set", "adaptivity.enabled=true",
+                    "--set", "adaptivity.max_vertices=100", "--set", "time.t_end=0.001",
+                    "--no-plots", "--no-progress")
+    assert result.returncode == 0, result.stderr
+    assert "ngfrac: warning: adaptivity.max_vertices = 100" in result.stderr
+    info = json.loads((out / "run.json").read_text())
+    assert any("max_vertices = 100" in line for line in info["resolution_warnings"])
+    with h5py.File(out / "results.h5", "r") as f:
+        assert json.loads(f.attrs["resolution_warnings"]) == info["resolution_warnings"]
