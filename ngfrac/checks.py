@@ -298,11 +298,6 @@ def nonfinite_value(expression: "Expression", coordinates: Sequence[np.ndarray],
 
 # -- resolution ----------------------------------------------------------------------------------
 
-def band_radius(epsilon: float, level: float) -> float:
-    """Distance from the crack where the optimal profile exp(-d/epsilon) falls to ``level``."""
-    return epsilon * math.log(1.0 / level)
-
-
 def crack_measure(scene: "Scene", radius: float) -> float:
     """Measure of the points within ``radius`` of the initial cracks (Steiner's formula,
     without the caps of crack ends on the boundary; overlaps counted twice)."""
@@ -340,11 +335,14 @@ def estimated_vertices(scene: "Scene") -> float:
         from .meshing import VERTEX_DENSITY as density
     else:
         from .meshing3d import VERTEX_DENSITY_3D as density
+    from .crackmodels import crack_model
+
     eps = scene.phase_field.epsilon
+    model = crack_model(scene.phase_field.model)  # where its optimal profile falls to a level
     volume = float(np.prod(scene.geometry.extent))
-    core = crack_measure(scene, band_radius(eps, CORE_LEVEL))
-    band = max(crack_measure(scene, band_radius(eps, BAND_LEVEL)) - core, 0.0)
-    tip = _tip_measure(scene, sizes.tip_margin, band_radius(eps, BAND_LEVEL)) if scene.cracks else 0.0
+    core = crack_measure(scene, model.half_width(eps, CORE_LEVEL))
+    band = max(crack_measure(scene, model.half_width(eps, BAND_LEVEL)) - core, 0.0)
+    tip = _tip_measure(scene, sizes.tip_margin, model.half_width(eps, BAND_LEVEL)) if scene.cracks else 0.0
     rest = max(volume - core - band - tip, 0.0)
     return density * (core / sizes.h_crack ** dim + band / sizes.h_band ** dim
                       + tip / sizes.h_tip ** dim + rest / sizes.hmax ** dim)

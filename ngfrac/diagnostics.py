@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 import ngsolve as ngs
 
+from .crackmodels import AT2, CrackModel
 from .threads import integrate
 
 
@@ -26,15 +27,18 @@ class Energies:
 
 def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.CoefficientFunction,
              gamma: ngs.CoefficientFunction, epsilon: float, residual_stiffness: float,
-             force_times_u: ngs.CoefficientFunction | None = None, order: int = 5) -> Energies:
+             force_times_u: ngs.CoefficientFunction | None = None, order: int = 5,
+             crack_model: CrackModel | None = None) -> Energies:
     """Integrate the three energies in one pass.
 
-    ``E_el = 1/2 int ((1-z)^2 + eta) sigma:e``, ``E_surf = 1/2 int gamma (eps|grad z|^2 + z^2/eps)``,
-    ``crack_length = 1/2 int (eps|grad z|^2 + z^2/eps)`` (the Gamma-limit of the surface term),
-    and the work ``int f.u`` when a body force is given.
+    ``E_el = 1/2 int g(z) sigma:e`` with ``g = (1-z)^2 + eta``, ``E_surf = int gamma w``,
+    ``crack_length = int w`` (the Gamma-limit of the surface term; ``w`` the crack model's
+    surface density, AT2's ``1/2 (eps|grad z|^2 + z^2/eps)`` by default), and the work
+    ``int f.u`` when a body force is given.
     """
-    surface = 0.5 * (epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)) + z * z / epsilon)
-    elastic = 0.5 * ((1 - z) ** 2 + residual_stiffness) * energy_density
+    model = crack_model or AT2()
+    surface = model.surface_density(z, epsilon)
+    elastic = 0.5 * model.degradation(z, residual_stiffness) * energy_density
     work = force_times_u if force_times_u is not None else ngs.CoefficientFunction(0.0)
     values = integrate(ngs.CoefficientFunction((elastic, gamma * surface, surface, work)), mesh, order=order)
     return Energies(*values)

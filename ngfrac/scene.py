@@ -22,6 +22,7 @@ from typing import Any, ClassVar, Mapping, get_type_hints
 import numpy as np
 
 from .checks import check_times, crack_problems, nonfinite_value
+from .crackmodels import CRACK_MODELS
 from .expressions import Expression, ExpressionError
 
 MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
@@ -255,7 +256,9 @@ class PhaseField(_Section):
     """Parameters of the Ambrosio-Tortorelli gradient flow.
 
     ``alpha1 du/dt = div((1-z)^2 sigma) + f``, ``alpha2 dz/dt = (...)_+``; the u-stiffness is
-    ``(1-z)^2 + residual_stiffness`` so the u-problem stays elliptic where z = 1.
+    ``(1-z)^2 + residual_stiffness`` so the u-problem stays elliptic where z = 1. ``model``
+    is the crack model, the surface term (:mod:`ngfrac.crackmodels`): ``"AT2"`` (the paper's)
+    or ``"AT1"`` (an elastic threshold).
     """
 
     SECTION: ClassVar[str] = "phase_field"
@@ -263,6 +266,7 @@ class PhaseField(_Section):
     alpha2: float = REQUIRED  # type: ignore[assignment]
     alpha1: float = 0.0
     residual_stiffness: float = 1e-6
+    model: str = "AT2"
 
     def validate(self) -> None:
         s = self.SECTION
@@ -271,6 +275,8 @@ class PhaseField(_Section):
         _require(self.alpha1 >= 0, s, "alpha1", self.alpha1, "must be >= 0 (0 = quasi-static u)")
         _require(0 < self.residual_stiffness < 1e-1, s, "residual_stiffness",
                  self.residual_stiffness, "must be in (0, 0.1); 1e-6 is typical")
+        _require(self.model in CRACK_MODELS, s, "model", self.model,
+                 f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
 
 
 @dataclass(frozen=True)

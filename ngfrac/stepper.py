@@ -24,7 +24,8 @@ import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
 from .adaptivity import Adaptation, MeshAdapter
-from .cracks import distance_to_cracks, initial_tip, optimal_profile
+from .cracks import distance_to_cracks, initial_tip
+from .crackmodels import crack_model
 from .crackset import CrackSet, NodeGraph, find_crack
 from .diagnostics import element_sizes, energies
 from .geometry import build_mesh
@@ -135,6 +136,8 @@ class PhaseFieldStepper:
     def __init__(self, scene: Scene, mesh: ngs.Mesh | None = None) -> None:
         self._scene = scene
         self.model = make_model(scene)
+        self.crack_model = crack_model(scene.phase_field.model)
+        """The phase-field functional (:mod:`ngfrac.crackmodels`)."""
         self.k = 0
         self.ticks = 0
         """Time as a count of ``time.dt``: t = ticks * dt, exact for any number of steps."""
@@ -215,7 +218,7 @@ class PhaseFieldStepper:
         dx = ngs.dx(intrules={element: ngs.IntegrationRule(element, self.integration_order)})
         self.dx = dx
         u, v = self.fes_u.TnT()
-        stiffness = ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v)
+        stiffness = self.crack_model.degradation(self.z, pf.residual_stiffness) * self.model.stress_strain(u, v)
         self.split = make_split(self.model, sc.material.split)
         if self.split is not None:  # nonlinear: a_u is the tangent at the current u (ngfrac.splits)
             stiffness = self.split.tangent(self.u, u, v, self.z, pf.residual_stiffness)
@@ -246,18 +249,21 @@ class PhaseFieldStepper:
         self.a_z = ngs.BilinearForm(self.fes_z, symmetric=True)
         self.a_z += self._drive * zt * w * dx
         self._k_z = ngs.BilinearForm(self.fes_z, symmetric=True)
-        self._k_z += (eps * gamma * ngs.grad(zt) * ngs.grad(w) + gamma / eps * zt * w) * dx
+        self._k_z += self.crack_model.stiffness(zt, w, gamma, eps) * dx
         self._m_z = ngs.BilinearForm(self.fes_z, symmetric=True)
         self._m_z += zt * w * dx
         self._z_fixed_assembled = False
-        self.f_z = ngs.LinearForm((pf.alpha2 * inv_dt * self.z + self._drive) * w * dx)
+        rhs = (pf.alpha2 * inv_dt * self.z + self._drive) * w
+        source = self.crack_model.source(w, gamma, eps)  # AT1: -3 gamma/(8 eps) w
+        self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inv_z = None
 
     def _set_initial_state(self) -> None:
-        """z0 = exp(-dist/eps) at the nodes; u0 solves the elastic problem at t = 0."""
+        """z0 = the crack model's optimal profile of the distance to the initial cracks at the
+        nodes (AT2: exp(-dist/eps)); u0 solves the elastic problem at t = 0."""
         if self._polylines:
             distance = distance_to_cracks(self.nodes.points, self._polylines)
-            self.nodes.assign(self.z, optimal_profile(distance, self.scene.phase_field.epsilon))
+            self.nodes.assign(self.z, self.crack_model.profile(distance, self.scene.phase_field.epsilon))
         else:
             self.z.vec[:] = 0.0
         self.time.Set(0.0)
@@ -271,7 +277,8 @@ class PhaseFieldStepper:
         pf = self.scene.phase_field
         u, v = self.fes_u.TnT()
         static = ngs.BilinearForm(self.fes_u, symmetric=True)
-        static += ((1 - self.z) ** 2 + pf.residual_stiffness) * self.model.stress_strain(u, v) * self.dx
+        static += (self.crack_model.degradation(self.z, pf.residual_stiffness)
+                   * self.model.stress_strain(u, v) * self.dx)
         solver = self.scene.discretization.u_solver
         pre = register_preconditioner(static, solver)
         with self._assembly_threads(pre):
@@ -331,7 +338,8 @@ class PhaseFieldStepper:
         if not self._polylines and self.nucleus is None and values.size and values.max() >= 0.5:
             self.nucleus = self.nodes.points[int(np.argmax(values))].copy()
         found = find_crack(self._node_graph, values, self._polylines, self._start_tip,
-                           band=eps * math.log(2.0) + near, bin_width=2 * eps, nucleus=self.nucleus)
+                           band=self.crack_model.half_width(eps) + near, bin_width=2 * eps,
+                           nucleus=self.nucleus)
         self._crack_cache = (key, found)
         return found
 
@@ -347,7 +355,7 @@ class PhaseFieldStepper:
         reason, self.adapter.reason = self.adapter.reason or "requested", ""
         eps = self.scene.phase_field.epsilon
         nv_before = self.mesh.nv
-        length_before = crack_length(self.z, eps)
+        length_before = crack_length(self.z, eps, self.crack_model)
         with self._solves():
             new_mesh, times = self.adapter.new_mesh(self.mesh, self.nodes, self.z, tip)
         started = time.perf_counter()
@@ -364,7 +372,7 @@ class PhaseFieldStepper:
             self.z.vec.data = z_new.vec
             self.u.vec.data = transfer(u_old, self.fes_u, method="set").vec
         self.u_prev.vec.data = self.u.vec
-        length_after = crack_length(self.z, eps)
+        length_after = crack_length(self.z, eps, self.crack_model)
         if self.scene.adaptivity.relax_core:
             self._relax_core(tip)
         times["transfer_s"] = time.perf_counter() - started
@@ -520,7 +528,7 @@ class PhaseFieldStepper:
         if self.split is None:
             return self.model.energy_density(self.u)
         eta = self.scene.phase_field.residual_stiffness
-        return 2 * self.split.elastic_density(self.u, self.z, eta) / ((1 - self.z) ** 2 + eta)
+        return 2 * self.split.elastic_density(self.u, self.z, eta) / self.crack_model.degradation(self.z, eta)
 
     def _solve_z(self) -> int:
         """The z-sub-step into z_trial; returns the CG iterations (0 for a direct solve)."""
@@ -671,7 +679,7 @@ class PhaseFieldStepper:
             e = energies(self.mesh, self.z, self._elastic_density(), self.gamma,
                          pf.epsilon, pf.residual_stiffness,
                          None if self.body_force is None else self.body_force * self.u,
-                         order=self.integration_order)
+                         order=self.integration_order, crack_model=self.crack_model)
         crack = self.crack()
         tip = crack.tip
         path_length = self._initial_length + crack.grown_length if self.mesh.dim == 2 else math.nan

@@ -43,6 +43,7 @@ import numpy as np
 import ngsolve as ngs
 from scipy.spatial import cKDTree
 
+from .crackmodels import AT2, CrackModel
 from .nodal import LagrangeNodes
 from .threads import integrate, parallel
 
@@ -149,7 +150,7 @@ def transfer_phase_field(z_old: ngs.GridFunction, bound_old: ngs.GridFunction,
     return z_new, bound_new
 
 
-def crack_length(z: ngs.GridFunction, epsilon: float) -> float:
-    """The Gamma-limit crack length ``1/2 int (eps |grad z|^2 + z^2 / eps) dx``."""
-    density = 0.5 * (epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)) + z * z / epsilon)
-    return integrate(density, z.space.mesh)
+def crack_length(z: ngs.GridFunction, epsilon: float, crack_model: CrackModel | None = None) -> float:
+    """The Gamma-limit crack length ``int w dx``, ``w`` the crack model's surface density
+    (AT2's ``1/2 (eps |grad z|^2 + z^2 / eps)`` by default)."""
+    return integrate((crack_model or AT2()).surface_density(z, epsilon), z.space.mesh)

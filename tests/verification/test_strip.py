@@ -47,12 +47,12 @@ def gamma_eff(eps: float) -> float:
 
 
 def strip_scene(eps: float, H: float, length: float, crack: float, d0: float, rate: float,
-                n_steps: int, hmin: float, max_vertices: int) -> Scene:
+                n_steps: int, hmin: float, max_vertices: int, model: str = "AT2") -> Scene:
     return Scene.from_dict({
         "name": "strip",
         "model": {"kind": "mode3"},
         "material": {"mu": MU, "gamma": GAMMA},
-        "phase_field": {"epsilon": eps, "alpha2": 1e-4, "residual_stiffness": 1e-6},
+        "phase_field": {"epsilon": eps, "alpha2": 1e-4, "residual_stiffness": 1e-6, "model": model},
         "geometry": {"width": length, "height": H},
         "cracks": [{"points": [[0.0, H / 2], [crack, H / 2]]}],
         "loads": [{"boundary": "bottom", "value": "0"},
