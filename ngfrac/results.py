@@ -97,6 +97,7 @@ class MeshArrays:
 
     @property
     def dim(self) -> int:
+        """2 or 3: the columns of ``coordinates``."""
         return int(self.coordinates.shape[1])
 
     @property

@@ -25,7 +25,7 @@ so the u-problem is nonlinear but well posed. It is solved by Newton's method wi
 tangent written out (:meth:`EnergySplit.tangent`: the second derivative of psi+ at the current
 u, a linear form in the trial function; NGSolve's symbolic ``Variation`` gives the same matrix
 by automatic differentiation but was 6x (Amor) and 27x (Miehe) slower to assemble), a
-backtracking line search on the energy, and the residual on the free dofs relative to |H u|
+backtracking line search on the energy, and the residual on the free dofs relative to ``|H u|``
 (1e-10) as the stopping test. Homogeneity gives ``D E(u) = H(u) u`` exactly (H the tangent at
 u), so the residual is ``H(u) u - rhs`` and the tangent at the
 converged u also gives the reaction forces (:mod:`ngfrac.reactions`).
@@ -52,7 +52,7 @@ with ``P1 = (e - e2 I)(e - e3 I)/((e1 - e2)(e1 - e3))``, ``P3 = (e - e1 I)(e - e
 (e3 - e2))`` (Sylvester); the denominators are positive where these are used. At a zero
 principal strain (a kink of <x>_+: the energy is only C^1 there) IfPos counts 0 as not
 positive, so the tangent is the second derivative from one side, the side of the strain as
-computed: round-off of ~1e-16 |e| picks it, and either side gives a valid Newton matrix.
+computed: round-off of ~1e-16 ``|e|`` picks it, and either side gives a valid Newton matrix.
 """
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ SPLITS = ("none", "amor", "miehe")
 """Values of ``material.split``."""
 
 _PAIR_TOLERANCE = 1e-13
-"""Two principal strains are equal where |r| > 1 - this (:func:`principal_strains_3d`)."""
+"""Two principal strains are equal where ``|r| > 1 -`` this (:func:`principal_strains_3d`)."""
 
 
 def _positive(x: Any) -> Any:
@@ -91,11 +91,11 @@ def principal_strains_3d(e: Any) -> tuple[Any, Any, Any]:
     ``r = det((e - q I)/p)/2`` in [-1, 1], the principal strains are q + p t for the roots t of
     ``t^3 - 3 t - 2 r``. With ``phi = acos(|r|)/3`` and ``a, b, c = 2 cos(phi), 2 cos(pi/3 +
     phi), 2 cos(pi/3 - phi)`` they are ``(a, -b, -c)`` for r >= 0 and ``(c, b, -a)`` for r < 0,
-    so that a repeated pair (|r| = 1, phi = 0) comes out bitwise equal. Round-off leaves |r| of
-    an exactly repeated pair up to ~1e-15 below 1 and acos would split the pair by ~1e-8 p, so
-    |r| > 1 - 1e-13 counts as a pair: the individual values of a pair closer than ~5e-7 p move
-    by less than that, their sum and product by ~1e-13 p^2. Where p = 0 (isotropic strain)
-    all three are q: nothing divides by p there.
+    so that a repeated pair (``|r| = 1``, phi = 0) comes out bitwise equal. Round-off leaves
+    ``|r|`` of an exactly repeated pair up to ~1e-15 below 1 and acos would split the pair by
+    ~1e-8 p, so ``|r| > 1 - 1e-13`` counts as a pair: the individual values of a pair closer
+    than ~5e-7 p move by less than that, their sum and product by ~1e-13 p^2. Where p = 0
+    (isotropic strain) all three are q: nothing divides by p there.
 
     Parameters
     ----------
@@ -177,7 +177,7 @@ class EnergySplit:
         self.kind, self.lam, self.mu, self.dim, self.bulk_dim = kind, lam, mu, dim, bulk_dim
 
     def psi(self, e: Any) -> Any:
-        """The undegraded density psi = lam/2 (tr e)^2 + mu |e|^2 (= 1/2 sigma:e)."""
+        """The undegraded density ``psi = lam/2 (tr e)^2 + mu |e|^2`` (= 1/2 sigma:e)."""
         return 0.5 * self.lam * ngs.Trace(e) ** 2 + self.mu * ngs.InnerProduct(e, e)
 
     def psi_plus(self, e: Any) -> Any:
@@ -288,7 +288,7 @@ def make_split(model: Any, kind: str) -> EnergySplit | None:
 
 @dataclass
 class NewtonResult:
-    """Iterations and the relative residuals of one solve: |r|/|H u| on the free dofs at each
+    """Iterations and the relative residuals of one solve: ``|r|/|H u|`` on the free dofs at each
     iterate (H u holds the reactions on the Dirichlet dofs, the natural scale)."""
 
     iterations: int
@@ -317,7 +317,7 @@ class NewtonSolver:
         Solver for the Newton systems, a ``discretization.u_solver`` (H is symmetric positive
         definite: the energy is convex and the residual stiffness keeps it strictly so).
     rtol : float
-        Stop when the residual on the free dofs is at most ``rtol`` |H u| (checked before a
+        Stop when the residual on the free dofs is at most ``rtol |H u|`` (checked before a
         Newton system is solved, so a converged iterate costs one assembly).
     max_iterations : int
         More Newton steps than this raise RuntimeError.
