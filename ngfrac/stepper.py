@@ -1,4 +1,4 @@
-"""The time stepper: the paper's semi-implicit staggered scheme (its eq. 7).
+"""The time stepper: the semi-implicit staggered scheme of the paper (its equation 7).
 
 Step k, from t_{k-1} to t_k = t_{k-1} + dt (all times on the grid n * time.dt)::
 
