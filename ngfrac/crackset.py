@@ -10,8 +10,10 @@ Along the crack set, ``s`` is the distance from the initial crack through the se
 the node graph, edge lengths as weights). A node is on the *ridge* when no neighbour across
 the band (offset within 45 degrees of the normal to the local direction of growth, the
 direction in which ``s`` increases) has a larger z: the ridge is where z is largest across the
-band. The tip is the end of the ridge: the crack node farthest in the direction of growth
-in the 45-degree cone ahead of the ridge node with the largest ``s``. In 3D the crack is a
+band. The tip is the end of the ridge: the mean of the crack nodes farthest in the direction
+of growth in the 40-degree cone ahead of the ridge node with the largest ``s`` (or ahead of
+the initial tip, along the first crack's last segment, when no ridge node lies beyond the
+initial band: a crack grown as a diffuse zone). In 3D the crack is a
 surface and its front a curve; the tip is the node of the crack set farthest along it (the
 most advanced point of the front), without the ridge test, which needs a 1D crack.
 """
@@ -35,6 +37,9 @@ THRESHOLD = 0.5
 ACROSS_COS = math.cos(math.radians(45.0))
 """A neighbour is across the band when its offset is within 45 degrees of the normal to the
 direction of growth (a narrower cone holds no neighbour of some P1 nodes)."""
+FRONT_COS = math.cos(math.radians(40.0))
+"""The tip lies in the cone of 40 degrees ahead of the ridge's end (a damaged corner of the
+specimen diagonally ahead, at 45 degrees, stays out)."""
 
 
 class NodeGraph:
@@ -238,19 +243,32 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     order = np.argsort(s[ridge], kind="stable")
     ridge_points, ridge_s = points[members[ridge]][order], s[ridge][order]
     n_zones = n_components - len(crack_labels)
-    if len(ridge_s) == 0 or ridge_s[-1] <= band:
-        tip = start if start is not None else (ridge_points[-1] if len(ridge_s) else none)
-        return CrackSet(tip, ridge_points, ridge_s, tip[None, :], 0.0, n_zones, len(members))
-    tip = ridge_points[-1]
-    if direction is not None:
+    ridge_grown = len(ridge_s) > 0 and ridge_s[-1] > band
+    not_grown_tip = start if start is not None else (ridge_points[-1] if len(ridge_s) else none)
+    if dim == 2 and ridge_grown:
         # the ridge's end and the direction there, from the ridge nodes near it and a little
         # behind it (where z is nearly flat across a wide front, single nodes and the
         # gradient of s scatter across the band)
         end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
         behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
         heading = end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[ridge][order][-1]
-        if np.linalg.norm(heading) > 0:
-            tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
+    elif dim == 2 and cracks and start is not None:
+        # a crack that grew as a diffuse zone (z falls along it as fast as across, so no node
+        # ahead of the initial band passes the ridge test): its front from the initial tip,
+        # in the direction of the first crack's last segment
+        end = start
+        heading = np.asarray(cracks[0][-1], dtype=float) - np.asarray(cracks[0][-2], dtype=float)
+    elif ridge_grown:  # 3D: the most advanced node of the crack set
+        end, heading = ridge_points[-1], None
+    else:
+        return CrackSet(not_grown_tip, ridge_points, ridge_s, not_grown_tip[None, :], 0.0, n_zones,
+                        len(members))
+    tip = end
+    if heading is not None and np.linalg.norm(heading) > 0:
+        tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
+    if not ridge_grown and np.linalg.norm(tip - start) <= band:
+        return CrackSet(not_grown_tip, ridge_points, ridge_s, not_grown_tip[None, :], 0.0, n_zones,
+                        len(members))
     grown = ridge_s > band
     origin = start if start is not None else ridge_points[0]
     path = _ridge_path(np.vstack([ridge_points[grown], tip]), np.append(ridge_s[grown], np.inf),
@@ -261,14 +279,14 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
 
 def _front(points: np.ndarray, s: np.ndarray, ridge_end: np.ndarray, direction: np.ndarray,
            depth: float) -> np.ndarray:
-    """The tip: the mean of the crack nodes in the cone of 45 degrees ahead of the ridge's
+    """The tip: the mean of the crack nodes in the cone of 40 degrees ahead of the ridge's
     end that lie within ``depth`` of the farthest one in the direction of growth. (Where the
     band rounds off, z falls towards 1/2 in every direction, so the ridge test stops a little
     behind the z = 1/2 front; a damaged corner beside the ridge's end, where the crack met a
     boundary, is not ahead of it; the mean keeps a flat front's scatter out.)"""
     offset = points - ridge_end
     along = offset @ direction
-    ahead = (along >= ACROSS_COS * np.linalg.norm(offset, axis=1)) & np.isfinite(s)
+    ahead = (along >= FRONT_COS * np.linalg.norm(offset, axis=1)) & np.isfinite(s)
     if not np.any(ahead):
         return ridge_end
     front = ahead & (along >= along[ahead].max() - depth)
