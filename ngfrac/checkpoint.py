@@ -16,6 +16,7 @@ Layout (``format_version`` 1)::
     /mesh/                 see MeshArrays
     /fields/u, u_prev, z   dof vectors (Fletcher-32 checksums); attrs: space, order, dim
     /nucleus               with no initial crack: where z first reached 1/2 (once it has)
+    /previous_tip          the last tip found
     /adapter/              attrs: eta_total, adaptations (JSON), vertex_density(_measured),
                            size_floor_ratio; datasets last_tip, achieved
 
@@ -71,6 +72,8 @@ class CheckpointState:
     """The adaptive step level (step = dt * 2**level)."""
     nucleus: np.ndarray | None = None
     """With no initial crack: where z first reached 1/2 (:attr:`PhaseFieldStepper.nucleus`)."""
+    previous_tip: np.ndarray | None = None
+    """The last tip found (:attr:`PhaseFieldStepper.previous_tip`)."""
 
     def build_mesh(self) -> ngs.Mesh:
         """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.results`)."""
@@ -102,6 +105,8 @@ def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
                 StoredField.of(getattr(stepper, name)).write(group, name)
             if stepper.nucleus is not None:  # no initial crack: where the crack started
                 f.create_dataset("nucleus", data=np.asarray(stepper.nucleus, dtype=np.float64))
+            if stepper.previous_tip is not None:  # the tip is kept while it is farther along
+                f.create_dataset("previous_tip", data=np.asarray(stepper.previous_tip, dtype=np.float64))
             _write_adapter(f, stepper)
         with open(tmp, "rb") as handle:  # the data must be on disk before the rename is
             os.fsync(handle.fileno())
@@ -172,6 +177,7 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
             fields = {name: StoredField.read(f["fields"][name]) for name in FIELDS}
             adapter = _read_adapter(f["adapter"]) if "adapter" in f else None
             nucleus = f["nucleus"][()] if "nucleus" in f else None
+            previous_tip = f["previous_tip"][()] if "previous_tip" in f else None
     except ResultsError as err:  # raised by the mesh checks
         raise CheckpointError(f"checkpoint {str(path)!r}: {err}") from None
     # Compare the scenes, not stored hashes: a newer ngfrac may add keys with defaults.
@@ -183,7 +189,7 @@ def load_checkpoint(path: str | Path, scene: Scene) -> CheckpointState:
     if k < 0 or not math.isfinite(t):
         raise CheckpointError(f"checkpoint {str(path)!r} is corrupt (step {k}, time {t})")
     return CheckpointState(path, k, t, scene_hash(stored), mesh, fields, adapter, ticks, level,
-                           nucleus)
+                           nucleus, previous_tip)
 
 
 def _read_adapter(group: h5py.Group) -> dict[str, Any]:
@@ -222,6 +228,8 @@ def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
     stepper.level = state.level
     stepper.time.Set(stepper.t)
     stepper.nucleus = None if state.nucleus is None else np.array(state.nucleus)
+    stepper.previous_tip = None if state.previous_tip is None else np.array(state.previous_tip)
+    stepper._crack_cache = None  # the tip of the restored z, found with the restored previous tip
     _restore_adapter(stepper, state)
 
 

@@ -185,7 +185,7 @@ def _ridge_path(points: np.ndarray, s: np.ndarray, start: np.ndarray, spacing: f
 
 def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence[Sequence[float]]],
                start: np.ndarray | None, band: float, bin_width: float,
-               nucleus: np.ndarray | None = None) -> CrackSet:
+               nucleus: np.ndarray | None = None, previous_tip: np.ndarray | None = None) -> CrackSet:
     """The crack set of a z field, its ridge, tip, grown length and the other damage zones.
 
     Parameters
@@ -206,6 +206,10 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     nucleus : (d,) array, optional
         With no initial crack: the point where damage first reached 1/2 (the crack is the
         component nearest to it).
+    previous_tip : (d,) array, optional
+        The tip found before (2D): z never decreases, so that point is still on the crack;
+        when the new front lies behind it in the direction of growth, it stays the tip (the
+        front's estimate scatters by about an element).
     """
     points = graph.points
     dim = points.shape[1]
@@ -266,6 +270,10 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     tip = end
     if heading is not None and np.linalg.norm(heading) > 0:
         tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
+    if heading is not None and previous_tip is not None and np.all(np.isfinite(previous_tip)):
+        before = np.asarray(previous_tip, dtype=float)[:dim]
+        if (tip - before) @ heading < 0:  # the new front lies behind the old tip
+            tip = before
     if not ridge_grown and np.linalg.norm(tip - start) <= band:
         return CrackSet(not_grown_tip, ridge_points, ridge_s, not_grown_tip[None, :], 0.0, n_zones,
                         len(members))

@@ -152,6 +152,9 @@ class PhaseFieldStepper:
                            if scene.cracks else None)
         self.nucleus: np.ndarray | None = None
         """With no initial crack: where z first reached 1/2 (the crack grows from there)."""
+        self.previous_tip: np.ndarray | None = None
+        """The last tip found (:func:`ngfrac.crackset.find_crack` keeps it while it is farther
+        along the crack than a new estimate)."""
         self._crack_cache: tuple[bytes, CrackSet] | None = None
         gamma = scene.material.gamma
         # A constant toughness stays a number: no coefficient evaluation in the forms.
@@ -339,8 +342,9 @@ class PhaseFieldStepper:
             self.nucleus = self.nodes.points[int(np.argmax(values))].copy()
         found = find_crack(self._node_graph, values, self._polylines, self._start_tip,
                            band=self.crack_model.half_width(eps) + near, bin_width=2 * eps,
-                           nucleus=self.nucleus)
+                           nucleus=self.nucleus, previous_tip=self.previous_tip)
         self._crack_cache = (key, found)
+        self.previous_tip = found.tip.copy()
         return found
 
     def tip(self) -> np.ndarray:

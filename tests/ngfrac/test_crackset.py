@@ -106,3 +106,18 @@ def test_in_3d_the_tip_is_on_the_crack_plane_not_on_a_damaged_face():
     assert abs(found.tip[1] - 0.5) < 0.05, found.tip
     assert 0.6 <= found.tip[0] <= 0.6 + 0.04 * math.log(2.0) + 0.05
     assert found.n_damage_zones == 1
+
+
+def test_the_tip_never_moves_back_along_the_crack(square):
+    """z never decreases, so the tip found before is still on the crack: a new front estimate
+    behind it (in the direction of growth) keeps the old tip."""
+    nodes, graph = square
+    z = crack_to(nodes.points, [0.6, 0.5])
+    ahead = np.array([0.63, 0.5])
+    found = find_crack(graph, z, [SLIT], np.array(SLIT[-1]), BAND, bin_width=2 * EPS,
+                       previous_tip=ahead)
+    assert found.tip == pytest.approx(ahead)
+    behind = np.array([0.5, 0.5])
+    found = find_crack(graph, z, [SLIT], np.array(SLIT[-1]), BAND, bin_width=2 * EPS,
+                       previous_tip=behind)
+    assert found.tip[0] > 0.6
