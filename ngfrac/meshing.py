@@ -428,12 +428,9 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
         h_lam = min(hmax, h_lo * (h / h_lo)^(1 + lam)),   h_lo = min h,
 
     which keeps h_lo exactly, keeps the order of sizes, and tends to {h_lo, hmax} as lam grows.
-    If even lam = 8 predicts too many vertices (the finest part alone is over the cap), stage 2
-    scales the requested field uniformly, ``s * h`` (s >= 1, also past hmax): it coarsens the
-    finest part too but keeps the ratios of all sizes. (Scaling ``h_8`` instead, which is
-    about {h_lo, hmax}, left a crack's core at h_crack = 1.5 h_lo on elements near hmax once
-    the crack had cut the quick slit's plate under a cap of 2,500.) Each stage is a bisection
-    on a monotone family (to 0.1 %).
+    If even lam = 8 predicts too many vertices, stage 2 scales that field uniformly,
+    ``s * h_8`` (s >= 1, also past hmax), which coarsens the finest part too. Each stage is a
+    bisection on a monotone family (to 0.1 %).
 
     Parameters
     ----------
@@ -473,7 +470,7 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
         lam = _bisect(lambda t: count(stage1(t)) <= max_vertices, 0.0, lam_max)
         log.info("vertex cap: coarse part raised (lambda=%.3g), finest h=%.3g kept", lam, h_lo)
         return grade(stage1(lam))
-    base = sizes
+    base = stage1(lam_max)
     s_max = 2.0
     while count(s_max * base) > max_vertices:
         s_max *= 2.0
