@@ -199,8 +199,9 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     start : (d,) array or None
         The tip before the crack grows (:func:`ngfrac.cracks.initial_tip`).
     band : float
-        How far along the crack the initial band reaches (``epsilon ln 2 + h``): a tip
-        closer than this to the initial crack is still ``start``.
+        How far along the crack the initial band reaches (where the crack model's profile
+        falls to 1/2, plus an element; AT2: ``epsilon ln 2 + h``): a tip closer than this to
+        the initial crack is still ``start``.
     bin_width : float
         Spacing of the points of the grown crack's polyline (a few epsilon).
     nucleus : (d,) array, optional
@@ -217,9 +218,13 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     start = None if start is None else np.asarray(start, dtype=float)[:dim]
     none = np.full(dim, np.nan) if start is None else start
     nothing = np.zeros((0, dim))
-    empty = CrackSet(none, nothing, np.zeros(0), none[None, :], 0.0, 0, 0)
+
+    def not_grown(tip: np.ndarray, ridge_points: np.ndarray = nothing, ridge_s: np.ndarray = nothing[:, 0],
+                  n_zones: int = 0, n_members: int = 0) -> CrackSet:
+        return CrackSet(tip, ridge_points, ridge_s, tip[None, :], 0.0, n_zones, n_members)
+
     if len(cracked) == 0:
-        return empty
+        return not_grown(none)
     sub = graph.graph[cracked][:, cracked]
     n_components, labels = csgraph.connected_components(sub, directed=False)
     if cracks:
@@ -232,7 +237,7 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         nearest = int(np.argmin(np.linalg.norm(points[cracked] - np.asarray(nucleus)[:dim], axis=1)))
         seeds = np.arange(len(cracked)) == nearest
     else:
-        return CrackSet(none, nothing, np.zeros(0), none[None, :], 0.0, n_components, 0)
+        return not_grown(none, n_zones=n_components)
     crack_labels = np.unique(labels[seeds])
     in_crack = np.isin(labels, crack_labels)
     members = cracked[in_crack]
@@ -265,8 +270,7 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     elif ridge_grown:  # 3D: the most advanced node of the crack set
         end, heading = ridge_points[-1], None
     else:
-        return CrackSet(not_grown_tip, ridge_points, ridge_s, not_grown_tip[None, :], 0.0, n_zones,
-                        len(members))
+        return not_grown(not_grown_tip, ridge_points, ridge_s, n_zones, len(members))
     tip = end
     if heading is not None and np.linalg.norm(heading) > 0:
         tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
@@ -275,8 +279,7 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         if (tip - before) @ heading < 0:  # the new front lies behind the old tip
             tip = before
     if not ridge_grown and np.linalg.norm(tip - start) <= band:
-        return CrackSet(not_grown_tip, ridge_points, ridge_s, not_grown_tip[None, :], 0.0, n_zones,
-                        len(members))
+        return not_grown(not_grown_tip, ridge_points, ridge_s, n_zones, len(members))
     grown = ridge_s > band
     origin = start if start is not None else ridge_points[0]
     path = _ridge_path(np.vstack([ridge_points[grown], tip]), np.append(ridge_s[grown], np.inf),
