@@ -22,7 +22,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "stress"), str(ROOT / "tests")]
 
 import ngsolve as ngs  # noqa: E402
 import numpy as np  # noqa: E402
-from ngfrac.stepper import PhaseFieldStepper  # noqa: E402
+from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
 
 import stress_cases as sc  # noqa: E402
 

@@ -50,7 +50,7 @@ import h5py
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, load_scene
-from ngfrac.cracks import distance_to_polylines
+from ngfrac.physics.cracks import distance_to_polylines
 
 ROOT = Path(__file__).resolve().parents[1]
 COLUMNS = ("t", "crack_length", "tip_x", "tip_y", "E_total", "nv", "step_s", "solve_s", "adapt_s",

@@ -11,8 +11,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
-from ngfrac.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
-from ngfrac.plotting import new_figure, read_history
+from ngfrac.post.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
+from ngfrac.io.plotting import new_figure, read_history
 
 
 def json_safe(value: Any) -> Any:

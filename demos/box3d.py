@@ -23,7 +23,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary
-from ngfrac.plotting import read_history
+from ngfrac.io.plotting import read_history
 
 from _common import command_line, run_and_report  # demos/_common.py
 

@@ -44,8 +44,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
-from ngfrac.crackpath import sharp_crack_solution
-from ngfrac.plotting import read_history
+from ngfrac.post.crackpath import sharp_crack_solution
+from ngfrac.io.plotting import read_history
 
 from _common import (command_line, measure_kink_both_ways, run_keeping_stepper,  # demos/_common.py
                      write_json)

@@ -7,7 +7,7 @@ thickness and its displacement in mm), force_displacement.png, path.json, VTK, h
 crack.png.
 
 What to expect. The top slides in +x, so the upper face of the notch slides in +x relative to
-the lower one: pure mode II with K_II > 0 (LEFM, :func:`ngfrac.crackpath.griffith_onset`:
+the lower one: pure mode II with K_II > 0 (LEFM, :func:`ngfrac.post.crackpath.griffith_onset`:
 K_I/K_II = 0.000, G = 29.8 u^2, F = 63.3 u), and the maximum hoop stress would kink the crack
 downwards by -70.5 degrees, towards the bottom right corner; that is what models with a
 tension/compression split show (Miehe et al.: a curved crack down to the bottom right, peak
@@ -34,8 +34,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, load_scene
-from ngfrac.crackpath import griffith_onset, history_path, initial_tip, measure_kink
-from ngfrac.plotting import read_history
+from ngfrac.post.crackpath import griffith_onset, history_path, initial_tip, measure_kink
+from ngfrac.io.plotting import read_history
 
 from _common import (command_line, plot_force_displacement, run_keeping_stepper,  # demos/_common.py
                      write_json)

@@ -7,7 +7,7 @@ thickness and its displacement in mm), force_displacement.png, peak.json, VTK, h
 and crack.png.
 
 What to expect. A sharp crack of length a = 0.5 in this clamped square has, by a
-finite-element LEFM solution (:func:`ngfrac.crackpath.griffith_onset`, P3 graded to
+finite-element LEFM solution (:func:`ngfrac.post.crackpath.griffith_onset`, P3 graded to
 h = 1e-3 at the tip), G = 129.5 u^2 and a top force F = 141.5 u (u in mm, kN/mm^2 moduli).
 Griffith, G = G_c = 2.7e-3 kN/mm, then gives the start of growth at u_c = 4.57e-3 mm and
 F_c = 0.646 kN; with the toughness of the discrete band, gamma (1 + h/(2 epsilon)) for a core
@@ -42,8 +42,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, load_scene, run_scene
-from ngfrac.crackpath import griffith_onset
-from ngfrac.plotting import read_history
+from ngfrac.post.crackpath import griffith_onset
+from ngfrac.io.plotting import read_history
 
 from _common import command_line, plot_force_displacement, write_json  # demos/_common.py
 

@@ -17,7 +17,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))  # the packages of this checkout, installed or not
 
-from ngfrac.output import ngfrac_version  # noqa: E402
+from ngfrac.io.output import ngfrac_version  # noqa: E402
 
 project = "ngfrac"
 author = "the ngfrac authors"

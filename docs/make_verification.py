@@ -19,10 +19,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the packages, before tests/ (which has a folder named estimators)
 sys.path.insert(1, str(ROOT / "tests"))
 
-from ngfrac.geometry import build_mesh  # noqa: E402
-from ngfrac.plotting import _pyplot  # noqa: E402
-from ngfrac.stepper import PhaseFieldStepper  # noqa: E402
-from ngfrac.studies import fit_rate  # noqa: E402
+from ngfrac.mesh.domains import build_mesh  # noqa: E402
+from ngfrac.io.plotting import _pyplot  # noqa: E402
+from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
+from ngfrac.post.studies import fit_rate  # noqa: E402
 from scenes import demo_data, quick_slit, scene_from  # noqa: E402
 
 sys.path.insert(1, str(ROOT / "tests" / "convergence"))

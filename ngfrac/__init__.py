@@ -19,13 +19,13 @@ import os as _os
 
 import ngsolve as _ngs
 
-from .checks import ResolutionWarning, resolution_warnings
-from .expressions import Expression, ExpressionError
-from .geometry import MeshingError
-from .output import ngfrac_version as _ngfrac_version
+from .scene.checks import ResolutionWarning, resolution_warnings
+from .scene.expressions import Expression, ExpressionError
+from .mesh.domains import MeshingError
+from .io.output import ngfrac_version as _ngfrac_version
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene
-from .stepper import PhaseFieldStepper, SolverError, StepRecord
+from .solve.stepper import PhaseFieldStepper, SolverError, StepRecord
 
 __all__ = ["Expression", "ExpressionError", "MeshingError", "PhaseFieldStepper", "ResolutionWarning",
            "RunSummary", "Scene", "SceneError", "SolverError", "StepRecord", "load_scene",

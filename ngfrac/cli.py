@@ -2,7 +2,7 @@
 ``ngfrac plot DIR`` and ``ngfrac check SCENE.toml``.
 
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
-(:func:`ngfrac.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
+(:func:`ngfrac.scene.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
 them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
 """
 from __future__ import annotations
@@ -13,13 +13,13 @@ import sys
 import warnings
 from pathlib import Path
 
-from .checkpoint import CheckpointError
-from .checks import ResolutionWarning, resolution_warnings
-from .geometry import MeshingError
-from .output import OutputError
-from .results import ResultsError
+from .io.checkpoint import CheckpointError
+from .scene.checks import ResolutionWarning, resolution_warnings
+from .mesh.domains import MeshingError
+from .io.output import OutputError
+from .io.results import ResultsError
 from .scene import Scene, SceneError, load_scene
-from .stepper import SolverError
+from .solve.stepper import SolverError
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
@@ -72,8 +72,8 @@ def _version_line() -> str:
 
 def _plot(args: argparse.Namespace) -> int:
     """``ngfrac plot DIR``: the figures into DIR/plots, each listed in DIR's manifest."""
-    from .output import Manifest
-    from .plotting import plot_run
+    from .io.output import Manifest
+    from .io.plotting import plot_run
 
     folder = Path(args.folder)
     if not folder.is_dir():

@@ -24,16 +24,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from .checkpoint import resume, save_checkpoint
-from .checks import ResolutionWarning, resolution_warnings
-from .crackpath import crack_path_rows, final_ridge
-from .fields import snapshot_fields
-from .output import (HistoryWriter, Manifest, OutputError, VTKSeries, atomic_write_text,
+from .io.checkpoint import resume, save_checkpoint
+from .scene.checks import ResolutionWarning, resolution_warnings
+from .post.crackpath import crack_path_rows, final_ridge
+from .post.fields import snapshot_fields
+from .io.output import (HistoryWriter, Manifest, OutputError, VTKSeries, atomic_write_text,
                      prepare_output_dir, read_run_json, run_metadata, to_toml, write_run_json)
-from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
-from .results import ResultsWriter
+from .io.plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
+from .io.results import ResultsWriter
 from .scene import Scene
-from .stepper import PhaseFieldStepper, StepRecord
+from .solve.stepper import PhaseFieldStepper, StepRecord
 
 log = logging.getLogger(__name__)
 
@@ -50,18 +50,18 @@ class RunSummary:
     last: StepRecord
     n_snapshots: int
     profile: str = ""
-    """The per-phase timing table (see :class:`ngfrac.profiling.PhaseTimer`)."""
+    """The per-phase timing table (see :class:`ngfrac.solve.profiling.PhaseTimer`)."""
 
 
 def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
-    """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.fields.snapshot_fields`
+    """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.post.fields.snapshot_fields`
     (energy density, stress, estimator, element size)."""
     series.write(stepper.mesh, snapshot_fields(stepper), stepper.t)
 
 
 def write_crack_path(out: Path, stepper: PhaseFieldStepper) -> Path:
     """crack_path.csv: the tip track of history.csv and the final ridge of z (2D with an
-    initial crack; :func:`ngfrac.crackpath.crack_path_rows` has the layout)."""
+    initial crack; :func:`ngfrac.post.crackpath.crack_path_rows` has the layout)."""
     history = read_history(out / "history.csv")
     ridge = final_ridge(stepper.scene, stepper.mesh, stepper.z)
     header, rows = crack_path_rows(history, ridge, stepper.k, stepper.t)
@@ -109,7 +109,7 @@ def _start(scene: Scene, out: Path, overwrite: bool,
 def run_info(scene: Scene) -> dict[str, Any]:
     """The ``run.json`` data of a new run of ``scene`` (also results.h5's root attributes).
 
-    :func:`~ngfrac.output.run_metadata` (versions, git commit, threads, command line, start
+    :func:`~ngfrac.io.output.run_metadata` (versions, git commit, threads, command line, start
     time), the scene's name, its resolution warnings (``resolution_warnings``, a list of
     lines, empty when the scene resolves its crack) and an empty ``restarts`` list.
     """
@@ -139,7 +139,7 @@ def record_restart(out: Path, scene: Scene, stepper: PhaseFieldStepper,
                    manifest: Manifest | None = None) -> dict[str, Any]:
     """Store the continued scene in ``scene.toml`` and append the restart to ``run.json``.
 
-    The restart entry holds :func:`~ngfrac.output.run_metadata` of this session, the step and
+    The restart entry holds :func:`~ngfrac.io.output.run_metadata` of this session, the step and
     time it continues from and the changed keys (``{"time.t_end": [old, new]}``).
     Returns the updated run.json data.
     """
@@ -185,7 +185,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     Warns
     -----
     ResolutionWarning
-        One per line of :func:`ngfrac.checks.resolution_warnings` (the mesh or epsilon
+        One per line of :func:`ngfrac.scene.checks.resolution_warnings` (the mesh or epsilon
         cannot resolve the crack), before anything is written.
     """
     for message in resolution_warnings(scene):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
-from ngfrac.output import to_toml
+from ngfrac.io.output import to_toml
 from ngfrac.scene import apply_overrides
 from scenes import demo_data
 

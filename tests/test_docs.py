@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from ngfrac.cli import _parser
-from ngfrac.expressions import CONSTANTS, FUNCTIONS, VARIABLES
+from ngfrac.scene.expressions import CONSTANTS, FUNCTIONS, VARIABLES
 from ngfrac.scene import LISTS, SECTIONS, SceneError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -7,8 +7,8 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.geometry import build_mesh
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.mesh.domains import build_mesh
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import demo_data, scene_from
 

@@ -12,9 +12,9 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.geometry import build_mesh
+from ngfrac.mesh.domains import build_mesh
 from ngfrac.scene import Material
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import demo_data, scene_from
 
@@ -53,7 +53,7 @@ def scene(order):
 
 
 def exact():
-    from ngfrac.expressions import Expression
+    from ngfrac.scene.expressions import Expression
     return ngs.CoefficientFunction((Expression(UX).to_coefficient(), Expression(UY).to_coefficient()))
 
 
@@ -68,7 +68,7 @@ def test_manufactured_force_is_minus_div_of_the_degraded_stress():
     sigma = [[s * (2 * MU * e[i][j] + (LAM * (e[0][0] + e[1][1]) if i == j else 0)) for j in range(2)]
              for i in range(2)]
     f = [-(sigma[i][0].Diff(ngs.x) + sigma[i][1].Diff(ngs.y)) for i in range(2)]
-    from ngfrac.expressions import Expression
+    from ngfrac.scene.expressions import Expression
     for i in range(2):
         diff = ngs.Integrate((Expression(FORCE[i]).to_coefficient() - f[i]) ** 2, mesh, order=10)
         assert np.sqrt(diff) < 1e-10

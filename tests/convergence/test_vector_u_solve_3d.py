@@ -16,10 +16,10 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.expressions import Expression
-from ngfrac.geometry import build_mesh
+from ngfrac.scene.expressions import Expression
+from ngfrac.mesh.domains import build_mesh
 from ngfrac.scene import Material, Scene
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 ETA = 1e-6
 E, NU = 50.0, 0.29

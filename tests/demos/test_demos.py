@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ngfrac.branching import crack_topology_of
-from ngfrac.crackpath import history_path, kink_angle
-from ngfrac.plotting import read_history
+from ngfrac.post.branching import crack_topology_of
+from ngfrac.post.crackpath import history_path, kink_angle
+from ngfrac.io.plotting import read_history
 
 ROOT = Path(__file__).resolve().parents[2]
 DEMOS = ROOT / "demos"
@@ -115,7 +115,7 @@ def check_stripes(history):
 
 def check_stripes_topology(stepper):
     # The crack that follows the stripes stays one crack with two ends and no sub-branch
-    # (z >= 1/2, Reeb graph at a shell of 2 eps; ngfrac.branching): no parameters tried
+    # (z >= 1/2, Reeb graph at a shell of 2 eps; ngfrac.post.branching): no parameters tried
     # gave branching (docs/theory.md, "Fig. 4"); counts are integers, no tolerance.
     found = crack_topology_of(stepper.z, spacing=2 * stepper.scene.phase_field.epsilon)
     assert (found.components, found.endpoints, found.branch_points) == (1, 2, 0), found

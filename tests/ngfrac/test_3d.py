@@ -6,13 +6,13 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.cracks import distance_to_polygons, initial_tip
-from ngfrac.geometry import build_mesh
-from ngfrac.models import Elasticity3D, make_model
-from ngfrac.nodal import LagrangeNodes
-from ngfrac.reactions import reaction_forces
+from ngfrac.physics.cracks import distance_to_polygons, initial_tip
+from ngfrac.mesh.domains import build_mesh
+from ngfrac.physics.elastic import Elasticity3D, make_model
+from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.post.reactions import reaction_forces
 from ngfrac.scene import Scene, SceneError
-from ngfrac.stepper import PhaseFieldStepper, StepRecord
+from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 
 from scenes import quick_slit
 

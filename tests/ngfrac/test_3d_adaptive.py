@@ -4,12 +4,12 @@ import copy
 import numpy as np
 import pytest
 
-from ngfrac.cracks import distance_to_polygons
-from ngfrac.geometry import build_mesh, netgen_geometry
-from ngfrac.meshing import ElementGeometry
-from ngfrac.meshing3d import adapt_mesh_3d
+from ngfrac.physics.cracks import distance_to_polygons
+from ngfrac.mesh.domains import build_mesh, netgen_geometry
+from ngfrac.mesh.remesh import ElementGeometry
+from ngfrac.mesh.remesh3d import adapt_mesh_3d
 from ngfrac.scene import Scene
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 CRACK = [[0.0, 0.25, 0.0], [0.2, 0.25, 0.0], [0.2, 0.25, 0.1], [0.0, 0.25, 0.1]]
 
@@ -70,7 +70,7 @@ def test_short_adaptive_3d_run_respects_cap_and_bounds():
 def test_3d_adaptive_restart_continues_exactly(tmp_path):
     """Checkpoints hold 3D meshes: a run stopped after two steps and restarted ends with the
     same history row as the uninterrupted run (mesh changes included)."""
-    from ngfrac.plotting import read_history
+    from ngfrac.io.plotting import read_history
     from ngfrac.runner import run_scene
 
     def scene(t_end):

@@ -5,12 +5,12 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.adaptivity import MeshAdapter
-from ngfrac.cracks import crack_direction, distance_to_polylines, optimal_profile
-from ngfrac.geometry import build_mesh
-from ngfrac.meshing import ElementGeometry
-from ngfrac.nodal import LagrangeNodes
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.mesh.adapter import MeshAdapter
+from ngfrac.physics.cracks import crack_direction, distance_to_polylines, optimal_profile
+from ngfrac.mesh.domains import build_mesh
+from ngfrac.mesh.remesh import ElementGeometry
+from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import quick_slit
 

@@ -5,9 +5,9 @@ import ngsolve as ngs
 import numpy as np
 import pytest
 
-from ngfrac.adaptivity import AdaptivitySizes
-from ngfrac.stepper import PhaseFieldStepper
-from ngfrac.transfer import evaluate, locate
+from ngfrac.mesh.adapter import AdaptivitySizes
+from ngfrac.solve.stepper import PhaseFieldStepper
+from ngfrac.mesh.transfer import evaluate, locate
 
 from scenes import demo_data, scene_from
 
@@ -119,7 +119,7 @@ def test_mesh_follows_the_tip(adaptive_run):
     grown = [a for a in stepper.adaptations if a.crack_length_before > records[0].crack_length + 0.2]
     assert grown, "no adaptation after the crack grew"
     # after the crack crossed, the fine elements lie along y = 0.5 all the way to the right
-    from ngfrac.meshing import ElementGeometry
+    from ngfrac.mesh.remesh import ElementGeometry
     geom = ElementGeometry.of(stepper.mesh)
     near_right_end = (geom.centroids[:, 0] > 0.9) & (np.abs(geom.centroids[:, 1] - 0.5) < 0.02)
     assert geom.diameters[near_right_end].min() < 2 * sizes.h_band

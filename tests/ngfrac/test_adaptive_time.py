@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import quick_slit
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.branching import crack_topology, crack_topology_of, node_graph
-from ngfrac.cracks import distance_to_polylines, optimal_profile
-from ngfrac.nodal import LagrangeNodes
+from ngfrac.post.branching import crack_topology, crack_topology_of, node_graph
+from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.solve.nodal import LagrangeNodes
 
 EPS = 0.02
 CRACKS = {

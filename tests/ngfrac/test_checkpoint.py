@@ -13,10 +13,10 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoint, restore, resume,
+from ngfrac.io.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoint, restore, resume,
                                save_checkpoint)
-from ngfrac.results import MeshArrays
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.io.results import MeshArrays
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import quick_slit
 
@@ -135,7 +135,7 @@ def test_adaptivity_state_round_trip(scene, reference, tmp_path):
     constant and size floor) and where a crack without an initial one started are restored."""
     from types import SimpleNamespace
 
-    from ngfrac.meshing import SizeFloor, VertexDensity
+    from ngfrac.mesh.remesh import SizeFloor, VertexDensity
 
     def with_adapter(stepper, tip, achieved, eta, density=None, floor=None):
         stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta,
@@ -219,7 +219,7 @@ def test_newer_checkpoint_format(copy_of_checkpoint, scene):
 
 
 def test_results_file_is_not_a_checkpoint(tmp_path, scene):
-    from ngfrac.results import ResultsWriter
+    from ngfrac.io.results import ResultsWriter
     path = tmp_path / "results.h5"
     ResultsWriter(path, scene).close()
     _expect_error(path, scene, "not an ngfrac checkpoint")
@@ -248,8 +248,8 @@ CHILD = textwrap.dedent("""
     ngs.SetNumThreads(1)
     sys.path.append({tests!r})
     from scenes import quick_slit
-    from ngfrac.checkpoint import save_checkpoint
-    from ngfrac.stepper import PhaseFieldStepper
+    from ngfrac.io.checkpoint import save_checkpoint
+    from ngfrac.solve.stepper import PhaseFieldStepper
 
     stepper = PhaseFieldStepper(quick_slit(*{scene!r}))
     while True:  # killed by the test; would run on to the scene's end time

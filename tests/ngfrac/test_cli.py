@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from ngfrac import cli
-from ngfrac import stepper as stepper_module
-from ngfrac.geometry import build_mesh
+from ngfrac.solve import stepper as stepper_module
+from ngfrac.mesh.domains import build_mesh
 
 from bad_inputs import ALL_CASES, bad_scene_file
 

@@ -1,4 +1,4 @@
-"""Crack paths, kink angles and the LEFM reference solution (ngfrac.crackpath)."""
+"""Crack paths, kink angles and the LEFM reference solution (ngfrac.post.crackpath)."""
 import math
 
 import numpy as np
@@ -6,7 +6,7 @@ import ngsolve as ngs
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.crackpath import (CrackPath, connected_part, crack_path_rows, deviation_from_line,
+from ngfrac.post.crackpath import (CrackPath, connected_part, crack_path_rows, deviation_from_line,
                               final_ridge,
                               history_path, initial_tip, kink_angle, mts_kink_angle, ridge_path,
                               sharp_crack_solution, stress_intensity_from_jump)

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from ngfrac.plotting import plot_mesh, plot_run, read_history
+from ngfrac.io.plotting import plot_mesh, plot_run, read_history
 from ngfrac.runner import run_scene
 
 from scenes import quick_slit
@@ -45,7 +45,7 @@ def test_mesh_picture_of_a_3d_mesh(tmp_path):
     from netgen.csg import unit_cube
     import ngsolve as ngs
 
-    from ngfrac.results import MeshArrays
+    from ngfrac.io.results import MeshArrays
 
     arrays = MeshArrays.of(ngs.Mesh(unit_cube.GenerateMesh(maxh=0.5)))
     png = plot_mesh(arrays.coordinates, arrays.cells, tmp_path / "mesh.png", facets=arrays.facets)
@@ -55,11 +55,11 @@ def test_mesh_picture_of_a_3d_mesh(tmp_path):
 def test_plots_leave_matplotlib_alone(run_folder):
     """Importing ngfrac imports no matplotlib; plotting neither imports pyplot nor sets a backend."""
     code = (
-        "import sys, ngfrac, ngfrac.plotting, ngfrac.runner\n"
+        "import sys, ngfrac, ngfrac.io.plotting, ngfrac.runner\n"
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported at import'\n"
         "import matplotlib\n"
         "matplotlib.use('svg')\n"
-        f"ngfrac.plotting.plot_run({str(run_folder)!r})\n"
+        f"ngfrac.io.plotting.plot_run({str(run_folder)!r})\n"
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -3,7 +3,7 @@ import ngsolve as ngs
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.expressions import Expression, ExpressionError
+from ngfrac.scene.expressions import Expression, ExpressionError
 
 
 def test_numpy_and_ngsolve_agree():

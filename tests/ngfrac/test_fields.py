@@ -6,11 +6,11 @@ import meshio
 import numpy as np
 import pytest
 
-from ngfrac.diagnostics import element_sizes
-from ngfrac.output import LARGE_SNAPSHOT, VTKSeries
+from ngfrac.post.diagnostics import element_sizes
+from ngfrac.io.output import LARGE_SNAPSHOT, VTKSeries
 from ngfrac.runner import write_snapshot
 from ngfrac.scene import Scene
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 LAM, MU, ETA = 2.0, 1.5, 1e-6
 # u = grad_u . x on every side: P2 holds it exactly, so the FE state is this uniform strain
@@ -143,8 +143,8 @@ def test_split_stresses_are_the_derivatives_of_the_split_densities(kind, eigenva
     from netgen.csg import unit_cube
     from netgen.geom2d import unit_square
 
-    from ngfrac.fields import split_stresses
-    from ngfrac.splits import EnergySplit
+    from ngfrac.post.fields import split_stresses
+    from ngfrac.physics.splits import EnergySplit
 
     dim = len(eigenvalues)
     strain = _symmetric(eigenvalues, seed=7)  # a rotation that mixes all entries
@@ -188,9 +188,9 @@ def test_3d_stress_von_mises_principal(tmp_path):
 
 
 def test_size_warning_once_per_series(tmp_path, monkeypatch):
-    import ngfrac.output
+    import ngfrac.io.output
 
-    monkeypatch.setattr(ngfrac.output, "LARGE_SNAPSHOT", 1000)  # every snapshot is "large"
+    monkeypatch.setattr(ngfrac.io.output, "LARGE_SNAPSHOT", 1000)  # every snapshot is "large"
     stepper = PhaseFieldStepper(_uniform_scene("mode3"))
     series = VTKSeries(tmp_path, 0)
     with warnings.catch_warnings(record=True) as caught:

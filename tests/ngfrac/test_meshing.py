@@ -1,4 +1,4 @@
-"""Mesh change by regeneration: size fields, coarsening, the vertex cap (ngfrac.meshing)."""
+"""Mesh change by regeneration: size fields, coarsening, the vertex cap (ngfrac.mesh.remesh)."""
 from __future__ import annotations
 
 import logging
@@ -8,10 +8,10 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac import meshing
-from ngfrac.cracks import distance_to_polylines, optimal_profile
-from ngfrac.geometry import build_mesh, netgen_geometry
-from ngfrac.meshing import (
+from ngfrac.mesh import remesh as meshing
+from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.mesh.domains import build_mesh, netgen_geometry
+from ngfrac.mesh.remesh import (
     ElementGeometry,
     SizeFloor,
     VertexDensity,
@@ -24,7 +24,7 @@ from ngfrac.meshing import (
     sample_size_field,
     size_field_from_indicator,
 )
-from ngfrac.nodal import LagrangeNodes
+from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 
 SQUARE = Geometry(width=1.0, height=1.0)
@@ -152,7 +152,7 @@ def test_learned_density_makes_one_mesh_per_change(caplog):
                             np.linalg.norm(centroids - tip, axis=1))
         sizes = np.clip(0.001 + 0.5 * distance, 0.001, HMAX)
         caplog.clear()
-        with caplog.at_level(logging.INFO, logger="ngfrac.meshing"):
+        with caplog.at_level(logging.INFO, logger="ngfrac.mesh.remesh"):
             mesh = adapt_mesh(background, SQUARE, sizes, hmax=HMAX, max_vertices=cap,
                               density=density)
         attempts.append(sum("remesh attempt" in r.getMessage() for r in caplog.records))

@@ -5,9 +5,9 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.geometry import build_mesh
-from ngfrac.models import AntiPlane, PlaneStrain, PlaneStress, make_model
-from ngfrac.output import to_toml
+from ngfrac.mesh.domains import build_mesh
+from ngfrac.physics.elastic import AntiPlane, PlaneStrain, PlaneStress, make_model
+from ngfrac.io.output import to_toml
 from ngfrac.scene import Material, Scene, SceneError, load_scene
 
 from scenes import demo_data

@@ -14,8 +14,8 @@ from pathlib import Path
 import h5py
 import pytest
 
-from ngfrac.output import Manifest, OutputError, git_revision, run_metadata
-from ngfrac.results import open_results
+from ngfrac.io.output import Manifest, OutputError, git_revision, run_metadata
+from ngfrac.io.results import open_results
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIT = str(ROOT / "demos" / "mode3_slit.toml")

@@ -12,9 +12,9 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.geometry import build_mesh
-from ngfrac.reactions import reaction_columns, reaction_forces
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.mesh.domains import build_mesh
+from ngfrac.post.reactions import reaction_columns, reaction_forces
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import demo_data, scene_from
 

@@ -12,8 +12,8 @@ import ngsolve as ngs
 import numpy as np
 import pytest
 
-from ngfrac.reactions import reaction_columns
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.post.reactions import reaction_columns
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import demo_data, scene_from
 

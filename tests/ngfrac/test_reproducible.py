@@ -1,5 +1,5 @@
 """The same scene gives the same bits: an adaptive run, twice with two NGSolve threads and once
-with one, writes identical histories (timing columns aside; ngfrac.threads says why)."""
+with one, writes identical histories (timing columns aside; ngfrac.solve.threads says why)."""
 from __future__ import annotations
 
 import csv

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from ngfrac import PhaseFieldStepper
-from ngfrac.expressions import Expression
-from ngfrac.output import to_toml
+from ngfrac.scene.expressions import Expression
+from ngfrac.io.output import to_toml
 from ngfrac.scene import (Components, Crack, Discretization, Geometry, Load, Material, Model, Output,
                           PhaseField, Scene, SceneError, TimeSettings, apply_overrides, load_scene)
 

@@ -1,4 +1,4 @@
-"""Tension/compression splits (ngfrac.splits): the tangent, Newton, and what a split changes."""
+"""Tension/compression splits (ngfrac.physics.splits): the tangent, Newton, and what a split changes."""
 import numpy as np
 import ngsolve as ngs
 import pytest
@@ -6,7 +6,7 @@ from netgen.geom2d import unit_square
 
 from ngfrac import PhaseFieldStepper, Scene
 from ngfrac.scene import SceneError
-from ngfrac.splits import EnergySplit, principal_strains_3d
+from ngfrac.physics.splits import EnergySplit, principal_strains_3d
 
 SPLITS = ["amor", "miehe"]
 
@@ -344,7 +344,7 @@ def test_3d_psi_plus_against_eigvalsh(state, cube):
 def test_differentiating_integrators_give_the_same_3d_tangent_and_are_switched_back(cube):
     """The stepper creates the 3D Miehe u-form inside tangent_integrators (8x faster to
     assemble): the matrix must not change, and the global flag must be restored."""
-    from ngfrac.splits import tangent_integrators
+    from ngfrac.physics.splits import tangent_integrators
     rng = np.random.default_rng(7)
     fes = ngs.VectorH1(cube, order=2)
     z = ngs.GridFunction(ngs.H1(cube, order=1))

@@ -32,8 +32,8 @@ def test_the_scene_of_a_live_stepper_cannot_be_swapped(finished):
 
 def test_a_script_writes_snapshots_from_its_own_loop(tmp_path):
     """The user guide's example: VTK and results.h5 snapshots without run_scene."""
-    from ngfrac.output import VTKSeries
-    from ngfrac.results import ResultsWriter, open_results
+    from ngfrac.io.output import VTKSeries
+    from ngfrac.io.results import ResultsWriter, open_results
     from ngfrac.runner import write_snapshot
 
     stepper = PhaseFieldStepper(quick_slit("time.t_end=4e-3", "time.dt=1e-3", "discretization.order=1"))

@@ -1,4 +1,4 @@
-"""ngfrac.studies.convergence_study: the manufactured u-solve study, rate fitting on synthetic
+"""ngfrac.post.studies.convergence_study: the manufactured u-solve study, rate fitting on synthetic
 data, and clear errors for bad keys and values."""
 import math
 
@@ -6,10 +6,10 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.geometry import build_mesh
+from ngfrac.mesh.domains import build_mesh
 from ngfrac.scene import SceneError
-from ngfrac.stepper import PhaseFieldStepper
-from ngfrac.studies import StudyRun, convergence_study, fit_rate, scene_with
+from ngfrac.solve.stepper import PhaseFieldStepper
+from ngfrac.post.studies import StudyRun, convergence_study, fit_rate, scene_with
 
 from convergence.test_u_solve import scene as u_solve_scene
 from scenes import quick_slit

@@ -1,4 +1,4 @@
-"""Field transfer between meshes (ngfrac.transfer)."""
+"""Field transfer between meshes (ngfrac.mesh.transfer)."""
 from __future__ import annotations
 
 import logging
@@ -8,12 +8,12 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.cracks import distance_to_polylines, optimal_profile
-from ngfrac.geometry import CRACK_BOUNDARY, build_mesh, netgen_geometry
-from ngfrac.meshing import ElementGeometry, adapt_mesh, enforce_crack_sizes
-from ngfrac.nodal import LagrangeNodes
+from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.mesh.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
+from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, enforce_crack_sizes
+from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
-from ngfrac.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
+from ngfrac.mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 SQUARE = Geometry(width=1.0, height=1.0)
 EPS = 0.02
@@ -122,7 +122,7 @@ def test_evaluation_matches_a_pointwise_loop_and_handles_outside_points(order, c
     assert np.allclose(evaluate(z, locate(mesh, points)), looped, atol=1e-14)
     corners = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.3]])
     assert np.all(np.isfinite(evaluate(z, locate(mesh, corners))))
-    with caplog.at_level(logging.WARNING, logger="ngfrac.transfer"):
+    with caplog.at_level(logging.WARNING, logger="ngfrac.mesh.transfer"):
         outside = evaluate(z, locate(mesh, np.array([[1.05, 0.5]])))
     assert "outside the old mesh" in caplog.text
     assert outside[0] == pytest.approx(z(mesh(1.0, 0.5)), abs=0.05)

@@ -6,10 +6,10 @@ import meshio
 import numpy as np
 import pytest
 
-from ngfrac.output import VTKSeries
-from ngfrac.results import ResultsWriter
+from ngfrac.io.output import VTKSeries
+from ngfrac.io.results import ResultsWriter
 from ngfrac.runner import write_snapshot
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 from scenes import demo_data, scene_from
 

@@ -20,11 +20,11 @@ from typing import Callable
 import numpy as np
 import ngsolve as ngs
 
-from ngfrac.checkpoint import load_checkpoint
-from ngfrac.cracks import optimal_profile
+from ngfrac.io.checkpoint import load_checkpoint
+from ngfrac.physics.cracks import optimal_profile
 from ngfrac.runner import CHECKPOINT, run_scene
 from ngfrac.scene import Components, Scene
-from ngfrac.stepper import PhaseFieldStepper, SolverError
+from ngfrac.solve.stepper import PhaseFieldStepper, SolverError
 
 from scenes import demo_data, scene_from
 

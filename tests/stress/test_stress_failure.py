@@ -6,7 +6,7 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.runner import CHECKPOINT
-from ngfrac.stepper import PhaseFieldStepper
+from ngfrac.solve.stepper import PhaseFieldStepper
 
 import stress_cases as sc
 

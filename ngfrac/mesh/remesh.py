@@ -4,7 +4,7 @@ NGSolve refines (bisection) but cannot coarsen, so every adaptation builds a *ne
 scene geometry from a mesh-size field: the field is sampled at points, each point restricts
 Netgen's local mesh size (``MeshingParameters.RestrictH``), and Netgen meshes from scratch.
 Refinement and coarsening are then the same operation, and the old mesh only serves to carry
-the field (one size per element) and the solution for :mod:`ngfrac.transfer`.
+the field (one size per element) and the solution for :mod:`ngfrac.mesh.transfer`.
 
 Pipeline (the caller makes h_T, :func:`adapt_mesh` does the rest)::
 
@@ -66,9 +66,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .geometry import MeshingError, netgen_geometry
-from .nodal import LagrangeNodes
-from .scene import Geometry
+from .domains import MeshingError, netgen_geometry
+from ..solve.nodal import LagrangeNodes
+from ..scene import Geometry
 
 log = logging.getLogger(__name__)
 
@@ -526,7 +526,7 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
     optimize_steps : int
         Netgen's ``optsteps2d``; 1 halves the time of the default 3 at nearly equal quality.
     max_attempts : int
-        Generations before giving up with a :class:`~ngfrac.geometry.MeshingError`.
+        Generations before giving up with a :class:`~ngfrac.mesh.domains.MeshingError`.
     density : VertexDensity, optional
         The run's learned vertex-count constant: used for the prediction and updated with the
         mesh made. Without it every call starts from :data:`VERTEX_DENSITY`.

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
-from .threads import integrate
+from ..solve.threads import integrate
 
 
 def indicator(fes: ngs.FESpace, boundary: str, component: int = 0) -> ngs.GridFunction:

@@ -43,9 +43,9 @@ import numpy as np
 import ngsolve as ngs
 from scipy.spatial import cKDTree
 
-from .crackmodels import AT2, CrackModel
-from .nodal import LagrangeNodes
-from .threads import integrate, parallel
+from ..physics.crack_models import AT2, CrackModel
+from ..solve.nodal import LagrangeNodes
+from ..solve.threads import integrate, parallel
 
 log = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """Initial cracks: distance to polylines (2D) or filled planar polygons (3D), the optimal
 profile exp(-d/epsilon), the initial tip; the direction of a crack at its tip. The crack set
-of a z field and its tip are in :mod:`ngfrac.crackset`."""
+of a z field and its tip are in :mod:`ngfrac.post.crackset`."""
 from __future__ import annotations
 
 from typing import Callable, Sequence

@@ -1,7 +1,7 @@
 """Meshes for scene geometries, with named boundaries and crack-aligned edges.
 
 The initial cracks are added to the Netgen geometry as interior lines (2D) or interior faces
-(3D, :mod:`ngfrac.meshing3d`), so the mesh has edges or faces along them. The initial profile exp(-d/epsilon) has a kink on the crack; on an aligned mesh
+(3D, :mod:`ngfrac.mesh.remesh3d`), so the mesh has edges or faces along them. The initial profile exp(-d/epsilon) has a kink on the crack; on an aligned mesh
 its P2 interpolant is smooth on each side and the surface energy is accurate, where a mesh
 that cuts the kink loses about 5% of it at h = epsilon/2 (measured; see tests).
 """
@@ -12,7 +12,7 @@ from typing import Any, Sequence
 import ngsolve as ngs
 from netgen.geom2d import SplineGeometry
 
-from .scene import Geometry
+from ..scene import Geometry
 
 CRACK_BOUNDARY = "crack"
 """Name of the interior mesh edges that follow the initial cracks."""
@@ -37,9 +37,9 @@ def netgen_geometry(geometry: Geometry,
                     cracks: Sequence[Sequence[Sequence[float]]] = ()) -> Any:
     """The Netgen geometry: the rectangle (boundaries bottom, right, top, left) and,
     when given, the crack polylines as interior lines; for a box the OCC geometry of
-    :func:`ngfrac.meshing3d.occ_geometry` (crack polygons as interior faces)."""
+    :func:`ngfrac.mesh.remesh3d.occ_geometry` (crack polygons as interior faces)."""
     if geometry.dim == 3:
-        from .meshing3d import occ_geometry
+        from .remesh3d import occ_geometry
 
         return occ_geometry(geometry, cracks)
     tol = 1e-10 * max(geometry.width, geometry.height)
@@ -106,7 +106,7 @@ def build_mesh(geometry: Geometry, maxh: float,
     if maxh <= 0:
         raise ValueError(f"maxh must be > 0, got {maxh}")
     if geometry.dim == 3:
-        from .meshing3d import build_mesh_3d
+        from .remesh3d import build_mesh_3d
 
         return build_mesh_3d(geometry, maxh, cracks)
     try:

@@ -45,10 +45,10 @@ import ngsolve as ngs
 import numpy as np
 
 from .output import atomic_write_text, to_toml
-from .scene import Scene, SceneError
+from ..scene import Scene, SceneError
 
 if TYPE_CHECKING:
-    from .stepper import PhaseFieldStepper, StepRecord
+    from ..solve.stepper import PhaseFieldStepper, StepRecord
 
 FORMAT = "ngfrac-results"
 FORMAT_VERSION = 1

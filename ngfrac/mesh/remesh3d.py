@@ -7,7 +7,7 @@ an interior face named ``crack`` (``netgen.occ.Glue``), so the tetrahedra have f
 as the triangles of a 2D mesh have edges on a slit (theory.md, "Crack-aligned meshes"). A
 polygon with an edge on a box face splits that face; both parts keep the face's name.
 
-Adaptive meshes are regenerated from a size field, as in 2D (:mod:`ngfrac.meshing`): the
+Adaptive meshes are regenerated from a size field, as in 2D (:mod:`ngfrac.mesh.remesh`): the
 sizes are sampled at points, each point restricts Netgen's local h
 (``MeshingParameters.RestrictH``) and ``OCCGeometry.GenerateMesh(mp=...)`` meshes the glued
 geometry from scratch. The 2D pipeline is dimension-generic except for three constants that
@@ -27,7 +27,7 @@ hmin = 0.04 / 0.02 / 0.01 around the demo's crack; docs/theory.md, "3D").
 
 The vertex cap is a hard limit exactly as in 2D: a mesh with too many vertices is discarded,
 the constant re-measured on it, and the mesh generated again. As in 2D the constant measured
-on the last mesh of a run predicts the next one (:class:`ngfrac.meshing.VertexDensity`).
+on the last mesh of a run predicts the next one (:class:`ngfrac.mesh.remesh.VertexDensity`).
 """
 from __future__ import annotations
 
@@ -39,10 +39,10 @@ import numpy as np
 import ngsolve as ngs
 import netgen.meshing as ngm
 
-from .geometry import MeshingError
-from .meshing import (NETGEN_GRADING, ElementGeometry, VertexDensity, _sample, cap_vertices,
+from .domains import MeshingError
+from .remesh import (NETGEN_GRADING, ElementGeometry, VertexDensity, _sample, cap_vertices,
                       element_grader, predict_vertices)
-from .scene import Geometry
+from ..scene import Geometry
 
 log = logging.getLogger(__name__)
 
@@ -146,10 +146,10 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
                   max_vertices: int, grading: float = NETGEN_GRADING,
                   density: VertexDensity | None = None, max_attempts: int = 8) -> ngs.Mesh:
     """Grade, cap, sample and remesh in 3D: the new mesh for element sizes given on ``mesh``
-    (the 3D twin of :func:`ngfrac.meshing.adapt_mesh`), with at most ``max_vertices`` vertices.
+    (the 3D twin of :func:`ngfrac.mesh.remesh.adapt_mesh`), with at most ``max_vertices`` vertices.
 
-    The cap acts on the graded element field (:func:`ngfrac.meshing.cap_vertices` with
-    :func:`ngfrac.meshing.element_grader`): Netgen grades in 3D too, and its grading halo
+    The cap acts on the graded element field (:func:`ngfrac.mesh.remesh.cap_vertices` with
+    :func:`ngfrac.mesh.remesh.element_grader`): Netgen grades in 3D too, and its grading halo
     holds most of the vertices of a fine crack band, so a prediction that ignores grading
     (coarsening the coarse part only) barely changes the real count. If Netgen still
     makes too many vertices, the constant is re-measured on that mesh, the margin tightened
@@ -173,7 +173,7 @@ def adapt_mesh_3d(mesh: ngs.Mesh, ngeo: Any, sizes: np.ndarray, *, hmax: float,
         The constant c learned from the previous meshes of the run (pass one instance to every
         call, as in 2D); until it has measured a 3D mesh, :data:`VERTEX_DENSITY_3D` is used.
     max_attempts : int
-        Generations before giving up with a :class:`~ngfrac.geometry.MeshingError`.
+        Generations before giving up with a :class:`~ngfrac.mesh.domains.MeshingError`.
     """
     density = density if density is not None else VertexDensity()
     geom = ElementGeometry.of(mesh)

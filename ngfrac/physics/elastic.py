@@ -16,8 +16,8 @@ from typing import Any, Protocol
 
 import ngsolve as ngs
 
-from .expressions import Expression
-from .scene import Components, Load, Material, Scene
+from ..scene.expressions import Expression
+from ..scene import Components, Load, Material, Scene
 
 
 class ElasticModel(Protocol):

@@ -23,21 +23,21 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
-from .adaptivity import Adaptation, MeshAdapter
-from .cracks import distance_to_cracks, initial_tip
-from .crackmodels import crack_model
-from .crackset import CrackSet, NodeGraph, find_crack
-from .diagnostics import element_sizes, energies
-from .geometry import build_mesh
-from .models import make_model
+from ..mesh.adapter import Adaptation, MeshAdapter
+from ..physics.cracks import distance_to_cracks, initial_tip
+from ..physics.crack_models import crack_model
+from ..post.crackset import CrackSet, NodeGraph, find_crack
+from ..post.diagnostics import element_sizes, energies
+from ..mesh.domains import build_mesh
+from ..physics.elastic import make_model
 from .nodal import LagrangeNodes
 from .profiling import PhaseTimer
-from .reactions import reaction_columns
-from .scene import Scene
-from .linsolve import iterations as solver_iterations, register_preconditioner, u_inverse, update
-from .splits import NewtonSolver, make_split, tangent_integrators
+from ..post.reactions import reaction_columns
+from ..scene import Scene
+from .linear import iterations as solver_iterations, register_preconditioner, u_inverse, update
+from ..physics.splits import NewtonSolver, make_split, tangent_integrators
 from .threads import parallel, serial
-from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
+from ..mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 
 log = logging.getLogger(__name__)
 
@@ -74,7 +74,7 @@ class StepRecord:
     path_length: float = math.nan
     """Geometric length of the crack: the initial cracks plus the grown ridge (2D; NaN in 3D)."""
     n_damage_zones: int = 0
-    """Components of {z >= 1/2} other than the crack (ngfrac.crackset)."""
+    """Components of {z >= 1/2} other than the crack (ngfrac.post.crackset)."""
     dz_max: float = math.nan
     z_iterations: int = 0
     dt: float = math.nan
@@ -137,7 +137,7 @@ class PhaseFieldStepper:
         self._scene = scene
         self.model = make_model(scene)
         self.crack_model = crack_model(scene.phase_field.model)
-        """The phase-field functional (:mod:`ngfrac.crackmodels`)."""
+        """The phase-field functional (:mod:`ngfrac.physics.crack_models`)."""
         self.k = 0
         self.ticks = 0
         """Time as a count of ``time.dt``: t = ticks * dt, exact for any number of steps."""
@@ -153,7 +153,7 @@ class PhaseFieldStepper:
         self.nucleus: np.ndarray | None = None
         """With no initial crack: where z first reached 1/2 (the crack grows from there)."""
         self.previous_tip: np.ndarray | None = None
-        """The last tip found (:func:`ngfrac.crackset.find_crack` keeps it while it is farther
+        """The last tip found (:func:`ngfrac.post.crackset.find_crack` keeps it while it is farther
         along the crack than a new estimate)."""
         self._crack_cache: tuple[bytes, CrackSet] | None = None
         gamma = scene.material.gamma
@@ -223,7 +223,7 @@ class PhaseFieldStepper:
         u, v = self.fes_u.TnT()
         stiffness = self.crack_model.degradation(self.z, pf.residual_stiffness) * self.model.stress_strain(u, v)
         self.split = make_split(self.model, sc.material.split)
-        if self.split is not None:  # nonlinear: a_u is the tangent at the current u (ngfrac.splits)
+        if self.split is not None:  # nonlinear: a_u is the tangent at the current u (ngfrac.physics.splits)
             stiffness = self.split.tangent(self.u, u, v, self.z, pf.residual_stiffness)
         if pf.alpha1 > 0:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
@@ -296,7 +296,7 @@ class PhaseFieldStepper:
         self.u_prev.vec.data = self.u.vec
         self.forces = reaction_columns(self)
 
-    # -- threads (ngfrac.threads) -------------------------------------------------------------
+    # -- threads (ngfrac.solve.threads) -------------------------------------------------------------
     def _step_threads(self) -> AbstractContextManager:
         """The context of a whole step: NGSolve's TaskManager with
         ``discretization.threaded_solves`` (results then vary with the schedule), else none."""
@@ -327,7 +327,7 @@ class PhaseFieldStepper:
 
     def crack(self) -> CrackSet:
         """The crack set of the current z: tip, ridge, grown length, other damage zones
-        (:func:`ngfrac.crackset.find_crack`)."""
+        (:func:`ngfrac.post.crackset.find_crack`)."""
         values = self.nodes.values(self.z)
         key = values.tobytes()
         if self._crack_cache is not None and self._crack_cache[0] == key:
@@ -484,7 +484,7 @@ class PhaseFieldStepper:
 
     def _solve_u_split(self, initial: bool = False) -> None:
         """The u-sub-step with a tension/compression split: Newton on the energy
-        (:mod:`ngfrac.splits`); ``initial``: the static problem at t = 0 (no alpha1 term)."""
+        (:mod:`ngfrac.physics.splits`); ``initial``: the static problem at t = 0 (no alpha1 term)."""
         self._apply_boundary_values()
         newton = self._newton
         rhs = self.u.vec.CreateVector()
@@ -508,7 +508,7 @@ class PhaseFieldStepper:
                 raise SolverError(f"the u-solve (material.split = {self.scene.material.split!r}) "
                                   f"failed at step {self.k + 1} (t={self.time.Get():g}): {err}; "
                                   "lower time.dt") from None
-            if initial:  # a_u.mat, the tangent at u, gives the reactions (ngfrac.reactions)
+            if initial:  # a_u.mat, the tangent at u, gives the reactions (ngfrac.post.reactions)
                 self.a_u.Assemble()
         if not np.all(np.isfinite(self.u.vec.FV().NumPy())):
             raise SolverError(f"the u-solve gave non-finite values at step {self.k + 1} "

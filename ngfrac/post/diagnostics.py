@@ -6,8 +6,8 @@ from dataclasses import dataclass
 import numpy as np
 import ngsolve as ngs
 
-from .crackmodels import AT2, CrackModel
-from .threads import integrate
+from ..physics.crack_models import AT2, CrackModel
+from ..solve.threads import integrate
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Checkpoints: everything a stepper needs to continue a run exactly, in one HDF5 file.
 
-A checkpoint holds the step counter k, the current mesh (as :class:`~ngfrac.results.MeshArrays`,
+A checkpoint holds the step counter k, the current mesh (as :class:`~ngfrac.io.results.MeshArrays`,
 so a mesh made by adaptive remeshing is restored as it was), the dof vectors of u, u_prev and
 z (z is also the non-repair bound of the next step), the adaptivity state when the scene adapts,
 and the resolved scene with a hash of the keys that change the solution. Restoring into a
@@ -39,10 +39,10 @@ import numpy as np
 
 from .results import (IGNORED_KEYS, MeshArrays, ResultsError, StoredField, check_format,
                       read_hdf5, read_scene, scene_differences, scene_hash, write_scene)
-from .scene import Scene
+from ..scene import Scene
 
 if TYPE_CHECKING:
-    from .stepper import PhaseFieldStepper
+    from ..solve.stepper import PhaseFieldStepper
 
 FORMAT = "ngfrac-checkpoint"
 FORMAT_VERSION = 1
@@ -76,7 +76,7 @@ class CheckpointState:
     """The last tip found (:attr:`PhaseFieldStepper.previous_tip`)."""
 
     def build_mesh(self) -> ngs.Mesh:
-        """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.results`)."""
+        """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.io.results`)."""
         return self.mesh_arrays.to_mesh()
 
 
@@ -248,7 +248,7 @@ def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> No
         adapter.density.value, adapter.density.measured = saved["vertex_density"]
     adapter.floor.ratio = saved.get("size_floor_ratio", 1.0)
     if saved["adaptations"]:
-        from .adaptivity import Adaptation
+        from ..mesh.adapter import Adaptation
         stepper.adaptations = [Adaptation(**record) for record in saved["adaptations"]]
     else:
         stepper.adaptations = []
@@ -256,7 +256,7 @@ def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> No
 
 def resume(path: str | Path, scene: Scene) -> "PhaseFieldStepper":
     """A stepper of ``scene`` continuing from the checkpoint at ``path``."""
-    from .stepper import PhaseFieldStepper
+    from ..solve.stepper import PhaseFieldStepper
 
     state = load_checkpoint(path, scene)
     stepper = PhaseFieldStepper(scene, mesh=state.build_mesh())

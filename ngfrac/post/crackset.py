@@ -28,7 +28,7 @@ import ngsolve as ngs
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from .cracks import distance_to_cracks
+from ..physics.cracks import distance_to_cracks
 
 __all__ = ["CrackSet", "NodeGraph", "find_crack"]
 
@@ -49,7 +49,7 @@ class NodeGraph:
     Parameters
     ----------
     mesh : ngsolve.Mesh
-    nodes : ngfrac.nodal.LagrangeNodes
+    nodes : ngfrac.solve.nodal.LagrangeNodes
         The nodes of z on ``mesh`` (vertices, then edge midpoints).
     """
 
@@ -197,7 +197,7 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     cracks : list of polylines (2D) or planar polygons (3D)
         The initial cracks; the crack set is what of ``{z >= 1/2}`` is connected to them.
     start : (d,) array or None
-        The tip before the crack grows (:func:`ngfrac.cracks.initial_tip`).
+        The tip before the crack grows (:func:`ngfrac.physics.cracks.initial_tip`).
     band : float
         How far along the crack the initial band reaches (where the crack model's profile
         falls to 1/2, plus an element; AT2: ``epsilon ln 2 + h``): a tip closer than this to

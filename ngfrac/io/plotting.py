@@ -67,7 +67,7 @@ def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: 
 
     ``mesh`` is an NGSolve mesh or a pair (coordinates, triangles); ``path`` an optional
     (n, 2) array of tip positions drawn on top. A 3D NGSolve mesh gives the two panels of
-    :func:`ngfrac.plotting3d.plot_phase_field_3d` (``path`` may then have a z column).
+    :func:`ngfrac.io.plotting3d.plot_phase_field_3d` (``path`` may then have a z column).
     """
     if not isinstance(mesh, tuple) and mesh.dim == 3:
         from .plotting3d import plot_phase_field_3d

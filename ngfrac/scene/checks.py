@@ -17,7 +17,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from .expressions import Expression
-    from .scene import Geometry, Scene
+    from .sections import Geometry, Scene
 
 __all__ = ["ResolutionWarning", "resolution_warnings", "estimated_vertices", "crack_problems",
            "nonfinite_value", "check_times"]
@@ -27,7 +27,7 @@ SAME_POINT = 1e-9
 
 BAND_LEVEL = 0.1
 CORE_LEVEL = 0.9
-"""z levels of the crack band and core (as :mod:`ngfrac.adaptivity` refines them)."""
+"""z levels of the crack band and core (as :mod:`ngfrac.mesh.adapter` refines them)."""
 
 
 class ResolutionWarning(UserWarning):
@@ -323,19 +323,19 @@ def estimated_vertices(scene: "Scene") -> float:
 
     ``c * sum(measure / h^d)`` over the core (z0 >= 0.9) at h_crack, the band (z0 >= 0.1)
     at h_band, the tip disc (ball) outside the band at h_tip and the rest at hmax, with
-    Netgen's vertex density c (:data:`ngfrac.meshing.VERTEX_DENSITY`,
-    :data:`ngfrac.meshing3d.VERTEX_DENSITY_3D`). Grading halos and the tip lane are left
+    Netgen's vertex density c (:data:`ngfrac.mesh.remesh.VERTEX_DENSITY`,
+    :data:`ngfrac.mesh.remesh3d.VERTEX_DENSITY_3D`). Grading halos and the tip lane are left
     out, so a real mesh has more.
     """
-    from .adaptivity import AdaptivitySizes
+    from ..mesh.adapter import AdaptivitySizes
 
     sizes = AdaptivitySizes.of(scene)
     dim = scene.geometry.dim
     if dim == 2:
-        from .meshing import VERTEX_DENSITY as density
+        from ..mesh.remesh import VERTEX_DENSITY as density
     else:
-        from .meshing3d import VERTEX_DENSITY_3D as density
-    from .crackmodels import crack_model
+        from ..mesh.remesh3d import VERTEX_DENSITY_3D as density
+    from ..physics.crack_models import crack_model
 
     eps = scene.phase_field.epsilon
     model = crack_model(scene.phase_field.model)  # where its optimal profile falls to a level
@@ -351,7 +351,7 @@ def estimated_vertices(scene: "Scene") -> float:
 def _tip_measure(scene: "Scene", radius: float, band: float, n: int = 32) -> float:
     """Measure of the tip disc (ball) of the first crack inside the domain and outside its
     band, on an n^d grid over the disc's bounding box."""
-    from .cracks import distance_to_cracks, initial_tip
+    from ..physics.cracks import distance_to_cracks, initial_tip
 
     geometry = scene.geometry
     polygons = [c.points for c in scene.cracks]
@@ -368,7 +368,7 @@ def resolution_warnings(scene: "Scene") -> list[str]:
     """One line for each way the scene cannot resolve its crack; empty when it can.
 
     * the element size asked in the crack band (uniform: ``mesh_size``; adaptive: h_band,
-      h_crack, h_tip as derived by :class:`ngfrac.adaptivity.AdaptivitySizes`) is above
+      h_crack, h_tip as derived by :class:`ngfrac.mesh.adapter.AdaptivitySizes`) is above
       epsilon/2;
     * adaptive: ``max_vertices`` is below :func:`estimated_vertices`, so the cap coarsens the
       band below the sizes asked;
@@ -383,7 +383,7 @@ def resolution_warnings(scene: "Scene") -> list[str]:
                          "the uniform mesh cannot resolve the crack band; use mesh_size <= "
                          f"{half:g} (or 0)")
     else:
-        from .adaptivity import AdaptivitySizes
+        from ..mesh.adapter import AdaptivitySizes
 
         sizes = AdaptivitySizes.of(scene)
         for name in ("h_crack", "h_band", "h_tip"):

@@ -22,8 +22,8 @@ import ngsolve as ngs
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from .meshing import ElementGeometry, edge_numbers
-from .nodal import LagrangeNodes
+from ..mesh.remesh import ElementGeometry, edge_numbers
+from ..solve.nodal import LagrangeNodes
 
 __all__ = ["CrackTopology", "crack_topology", "node_graph", "crack_topology_of"]
 

@@ -1,4 +1,4 @@
-"""Scene: everything one run needs, as frozen dataclasses read from TOML.
+"""The scene sections and the Scene: everything one run needs, as frozen dataclasses.
 
 A scene file has the sections ``[model]``, ``[material]``, ``[phase_field]``,
 ``[geometry]``, ``[[cracks]]``, ``[[loads]]``, ``[time]``, ``[discretization]``,
@@ -14,7 +14,6 @@ import dataclasses
 import difflib
 import functools
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Mapping, get_type_hints
@@ -22,7 +21,7 @@ from typing import Any, ClassVar, Mapping, get_type_hints
 import numpy as np
 
 from .checks import check_times, crack_problems, nonfinite_value
-from .crackmodels import CRACK_MODELS
+from ..physics.crack_models import CRACK_MODELS
 from .expressions import Expression, ExpressionError
 
 MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
@@ -203,7 +202,7 @@ class Material(_Section):
     """Body force f, expressions in x, y, t (mode III: out of plane)."""
     split: str = "none"
     """Tension/compression split of the elastic energy: "none" (the paper's model), "amor"
-    (volumetric-deviatoric) or "miehe" (spectral); see :mod:`ngfrac.splits`."""
+    (volumetric-deviatoric) or "miehe" (spectral); see :mod:`ngfrac.physics.splits`."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -257,7 +256,7 @@ class PhaseField(_Section):
 
     ``alpha1 du/dt = div((1-z)^2 sigma) + f``, ``alpha2 dz/dt = (...)_+``; the u-stiffness is
     ``(1-z)^2 + residual_stiffness`` so the u-problem stays elliptic where z = 1. ``model``
-    is the crack model, the surface term (:mod:`ngfrac.crackmodels`): ``"AT2"`` (the paper's)
+    is the crack model, the surface term (:mod:`ngfrac.physics.crack_models`): ``"AT2"`` (the paper's)
     or ``"AT1"`` (an elastic threshold).
     """
 
@@ -514,7 +513,7 @@ class Discretization(_Section):
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
     an energy descent. ``threaded_solves = false`` (the default) runs factorizations and
     solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
-    thread count (:mod:`ngfrac.threads`); ``true`` threads them too.
+    thread count (:mod:`ngfrac.solve.threads`); ``true`` threads them too.
     """
 
     SECTION: ClassVar[str] = "discretization"
@@ -626,7 +625,7 @@ class Scene:
     """A complete, validated run description. Build it with :func:`load_scene`,
     :meth:`Scene.from_dict` or in code: sections may be given as dicts of their keys, loads and
     cracks as lists, and every section coerces plain numbers, strings and lists. Validation
-    also refuses crack geometry Netgen cannot mesh (:func:`ngfrac.checks.crack_problems`) and
+    also refuses crack geometry Netgen cannot mesh (:func:`ngfrac.scene.checks.crack_problems`) and
     expressions that are NaN or infinite on their boundary or domain for 0 <= t <= t_end.
     ``dataclasses.replace`` returns a new scene, validated again."""
 
@@ -738,7 +737,7 @@ class Scene:
                              f"set model.kind = {MODELS_3D[0]!r}")
 
     def _check_split(self) -> None:
-        """A split needs a vector model (ngfrac.splits)."""
+        """A split needs a vector model (ngfrac.physics.splits)."""
         split, kind = self.material.split, self.model.kind
         if split != "none" and kind == "mode3":
             raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
@@ -934,69 +933,3 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
                              "(3D: [[x, y, z], ...])")
         return tuple(tuple(_convert(c, float, key) for c in v) for v in value)
     raise TypeError(f"no conversion for {hint}")  # a programming error, not user input
-
-
-def parse_override(text: str) -> tuple[list[str], Any]:
-    """Split ``"time.t_end=0.05"`` into (["time", "t_end"], 0.05); values are TOML."""
-    if "=" not in text:
-        raise SceneError(f"--set {text!r}: write key=value, e.g. time.t_end=0.05")
-    key, raw = text.split("=", 1)
-    path = [part for part in key.strip().split(".") if part]
-    if not path:
-        raise SceneError(f"--set {text!r}: the key is empty")
-    try:
-        value = tomllib.loads(f"v = {raw.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw.strip()  # bare words are strings: --set model.kind=mode3
-    return path, value
-
-
-def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
-    """Apply ``key=value`` overrides to raw scene data (a copy is returned)."""
-    import copy
-
-    result = copy.deepcopy(data)
-    for text in overrides:
-        path, value = parse_override(text)
-        node: Any = result
-        for i, part in enumerate(path[:-1]):
-            if isinstance(node, list):
-                try:
-                    node = node[int(part)]
-                except (ValueError, IndexError):
-                    raise SceneError(f"--set {text!r}: {'.'.join(path[:i + 1])} is not an index "
-                                     "of the list") from None
-            else:
-                node = node.setdefault(part, {})
-            if not isinstance(node, (dict, list)):
-                raise SceneError(f"--set {text!r}: {'.'.join(path[:i + 1])} is not a section")
-        if isinstance(node, list):
-            raise SceneError(f"--set {text!r}: give an index into the list, e.g. loads.0.value=...")
-        node[path[-1]] = value
-    return result
-
-
-def read_scene_data(path: str | Path) -> dict[str, Any]:
-    """Read raw TOML scene data, with one-line errors for missing or malformed files."""
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(f"scene file {str(path)!r} does not exist")
-    try:
-        with path.open("rb") as handle:
-            return tomllib.load(handle)
-    except tomllib.TOMLDecodeError as err:
-        raise SceneError(f"scene file {str(path)!r} is not valid TOML: {err}") from None
-
-
-def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
-    """Read, override and validate a scene file.
-
-    Parameters
-    ----------
-    path : str or Path
-        A TOML scene file.
-    overrides : list of str, optional
-        ``"section.key=value"`` items applied before validation.
-    """
-    data = apply_overrides(read_scene_data(path), overrides or [])
-    return Scene.from_dict(data, name=Path(path).stem)

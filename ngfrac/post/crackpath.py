@@ -340,7 +340,7 @@ class SharpCrack:
 
     ``K_I``, ``K_II`` from the crack-face jump; ``energy`` = 1/2 int sigma:e; ``reactions``
     maps ``F<c>_<boundary>`` to the force on each loaded boundary (the integral of the
-    traction, from the residual as in :mod:`ngfrac.reactions`); ``G`` = (K_I^2 + K_II^2)/E'.
+    traction, from the residual as in :mod:`ngfrac.post.reactions`); ``G`` = (K_I^2 + K_II^2)/E'.
     """
 
     K_I: float
@@ -366,7 +366,7 @@ def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1
     """
     import ngsolve as ngs
 
-    from .models import make_model
+    from ..physics.elastic import make_model
 
     model = make_model(scene)
     if model.n_components != 2:

@@ -4,7 +4,7 @@ All of them are what the stepper itself uses, with the degradation g(z) = (1-z)^
 (eta = ``phase_field.residual_stiffness``) that the u-equation and the diagnostics carry:
 
 - ``energy_density``: the integrand of E_el, ``1/2 g(z) sigma[u]:e[u]``; with a split
-  ``g(z) psi+ + psi-`` (:mod:`ngfrac.splits`);
+  ``g(z) psi+ + psi-`` (:mod:`ngfrac.physics.splits`);
 - ``stress``: the degraded stress dW/de of that density (with a split g(z) sigma+ + sigma-).
   Mode III: the shear stress vector ``g(z) mu grad u`` = (sigma_xz, sigma_yz); plane models:
   (sigma_xx, sigma_yy, sigma_xy); 3D: (xx, yy, zz, xy, yz, xz), the order VTK reads as a
@@ -22,12 +22,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import ngsolve as ngs
 
-from .adaptivity import z_indicators
+from ..mesh.adapter import z_indicators
 from .diagnostics import element_sizes
-from .splits import EnergySplit, principal_strains_3d
+from ..physics.splits import EnergySplit, principal_strains_3d
 
 if TYPE_CHECKING:
-    from .stepper import PhaseFieldStepper
+    from ..solve.stepper import PhaseFieldStepper
 
 __all__ = ["degradation", "elastic_energy_density", "degraded_stress", "split_stresses",
            "stress_components", "von_mises", "principal_stresses", "projected",
@@ -67,7 +67,7 @@ def split_stresses(split: EnergySplit, e: Any) -> tuple[Any, Any]:
 
     Amor: ``sigma+ = K <tr e>_+ I + 2 mu dev e``, ``sigma- = K <tr e>_- I``. Miehe:
     ``sigma+ = lam <tr e>_+ I + 2 mu <e>_+`` with ``<e>_+ = sum_i <e_i>_+ P_i`` (the
-    eigenprojections as in :mod:`ngfrac.splits`), ``sigma- = sigma - sigma+``.
+    eigenprojections as in :mod:`ngfrac.physics.splits`), ``sigma- = sigma - sigma+``.
     """
     dim, lam, mu = split.dim, split.lam, split.mu
     identity = ngs.Id(dim)

@@ -28,7 +28,7 @@ by automatic differentiation but was 6x (Amor) and 27x (Miehe) slower to assembl
 backtracking line search on the energy, and the residual on the free dofs relative to ``|H u|``
 (1e-10) as the stopping test. Homogeneity gives ``D E(u) = H(u) u`` exactly (H the tangent at
 u), so the residual is ``H(u) u - rhs`` and the tangent at the
-converged u also gives the reaction forces (:mod:`ngfrac.reactions`).
+converged u also gives the reaction forces (:mod:`ngfrac.post.reactions`).
 
 Miehe's tangent in 2D, with principal strains e1 >= e2, eigenvectors n1, n2, P1 = n1 n1^T:
 ``d^2 e1[h, k] = 2 (n1.h.n2)(n1.k.n2)/(e1 - e2)`` and
@@ -64,8 +64,8 @@ from typing import Any, Callable, Iterator
 import ngsolve as ngs
 import numpy as np
 
-from .linsolve import iterations as solver_iterations, u_inverse, update
-from .threads import integrate, parallel, serial
+from ..solve.linear import iterations as solver_iterations, u_inverse, update
+from ..solve.threads import integrate, parallel, serial
 
 log = logging.getLogger(__name__)
 
@@ -273,7 +273,7 @@ def tangent_integrators(split: EnergySplit | None) -> Iterator[None]:
 
 
 def make_split(model: Any, kind: str) -> EnergySplit | None:
-    """The split ``kind`` for a model from :mod:`ngfrac.models`, None for ``"none"``.
+    """The split ``kind`` for a model from :mod:`ngfrac.physics.elastic`, None for ``"none"``.
 
     Raises ValueError for mode III (no volumetric part).
     """
@@ -324,7 +324,7 @@ class NewtonSolver:
     preconditioner : ngsolve.Preconditioner, optional
         Registered with ``a`` before its first assembly; needed for ``inverse = "cg"``.
     solves : callable, optional
-        Returns the context of factorizations and solves (default :func:`ngfrac.threads.serial`,
+        Returns the context of factorizations and solves (default :func:`ngfrac.solve.threads.serial`,
         bitwise reproducible).
     """
 
