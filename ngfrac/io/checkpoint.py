@@ -40,6 +40,7 @@ import numpy as np
 from .results import (IGNORED_KEYS, MeshArrays, ResultsError, StoredField, check_format,
                       read_hdf5, read_scene, scene_differences, scene_hash, write_scene)
 from ..scene import Scene
+from ..solve.state import StepperState
 
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper
@@ -79,35 +80,58 @@ class CheckpointState:
         """The checkpoint's mesh, numbered as the original (see :mod:`ngfrac.io.results`)."""
         return self.mesh_arrays.to_mesh()
 
+    def stepper_state(self, mesh: ngs.Mesh | None = None) -> StepperState:
+        """The stepper's state stored here, on ``mesh`` (a mesh equal to the stored one, e.g.
+        a stepper's own) or on the stored mesh rebuilt."""
+        mesh = self.build_mesh() if mesh is None else mesh
+        try:
+            fields = {name: stored.gridfunction(mesh, name) for name, stored in self.fields.items()}
+        except ResultsError as err:
+            raise CheckpointError(f"checkpoint {str(self.path)!r}: {err}") from None
+        adapter = None
+        if self.adapter is not None:
+            from ..mesh.adapter import Adaptation
+            adapter = {**self.adapter,
+                       "adaptations": [Adaptation(**a) for a in self.adapter["adaptations"]]}
+        return StepperState(self.k, self.ticks, self.level, mesh, fields, self.nucleus,
+                            self.previous_tip, adapter)
+
 
 # -- writing ----------------------------------------------------------------------------------
 def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
-    """Write the stepper's state to ``path`` atomically (a temporary file, then a rename).
+    """Write the stepper's state (:meth:`PhaseFieldStepper.state`) to ``path`` atomically (a
+    temporary file, then a rename).
 
     Raises :class:`CheckpointError` when the file cannot be written (a full disk, a missing
     folder); an earlier checkpoint at ``path`` is then left as it was.
     """
+    return save_state(stepper.state(), stepper.scene, path)
+
+
+def save_state(state: StepperState, scene: Scene, path: str | Path) -> Path:
+    """Write a stepper state of ``scene`` to ``path`` atomically (see :func:`save_checkpoint`)."""
     path = Path(path)
     tmp = path.with_suffix(".tmp")
     try:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = FORMAT
             f.attrs["format_version"] = FORMAT_VERSION
-            f.attrs["k"] = int(stepper.k)
-            f.attrs["ticks"] = int(stepper.ticks)
-            f.attrs["level"] = int(stepper.level)
-            f.attrs["t"] = float(stepper.t)
-            f.attrs["scene_hash"] = scene_hash(stepper.scene)
-            write_scene(f, stepper.scene)
-            MeshArrays.of(stepper.mesh).write(f.create_group("mesh"))
+            f.attrs["k"] = int(state.k)
+            f.attrs["ticks"] = int(state.ticks)
+            f.attrs["level"] = int(state.level)
+            f.attrs["t"] = float(state.ticks * scene.time.dt)
+            f.attrs["scene_hash"] = scene_hash(scene)
+            write_scene(f, scene)
+            MeshArrays.of(state.mesh).write(f.create_group("mesh"))
             group = f.create_group("fields")
             for name in FIELDS:
-                StoredField.of(getattr(stepper, name)).write(group, name)
-            if stepper.nucleus is not None:  # no initial crack: where the crack started
-                f.create_dataset("nucleus", data=np.asarray(stepper.nucleus, dtype=np.float64))
-            if stepper.previous_tip is not None:  # the tip is kept while it is farther along
-                f.create_dataset("previous_tip", data=np.asarray(stepper.previous_tip, dtype=np.float64))
-            _write_adapter(f, stepper)
+                StoredField.of(state.fields[name]).write(group, name)
+            if state.nucleus is not None:  # no initial crack: where the crack started
+                f.create_dataset("nucleus", data=np.asarray(state.nucleus, dtype=np.float64))
+            if state.previous_tip is not None:  # the tip is kept while it is farther along
+                f.create_dataset("previous_tip", data=np.asarray(state.previous_tip, dtype=np.float64))
+            if state.adapter is not None:
+                _write_adapter(f, state.adapter)
         with open(tmp, "rb") as handle:  # the data must be on disk before the rename is
             os.fsync(handle.fileno())
         os.replace(tmp, path)
@@ -137,24 +161,20 @@ def _fsync_folder(folder: Path) -> None:
         os.close(fd)
 
 
-def _write_adapter(f: h5py.File, stepper: "PhaseFieldStepper") -> None:
-    """The adaptivity state that decides when the next mesh change happens."""
-    adapter = getattr(stepper, "adapter", None)
-    if adapter is None:
-        return
+def _write_adapter(f: h5py.File, state: dict[str, Any]) -> None:
+    """The adaptivity state that decides when the next mesh change happens
+    (:meth:`ngfrac.mesh.adapter.MeshAdapter.state` and the changes so far)."""
     group = f.create_group("adapter")
-    group.attrs["eta_total"] = float(adapter.eta_total)
+    group.attrs["eta_total"] = float(state["eta_total"])
     # the learned vertex constant decides the next meshes: without it a restart remeshes
     # differently from the uninterrupted run
-    group.attrs["vertex_density"] = float(adapter.density.value)
-    group.attrs["vertex_density_measured"] = bool(adapter.density.measured)
-    group.attrs["size_floor_ratio"] = float(adapter.floor.ratio)  # learned like the density
-    if adapter.last_tip is not None:
-        group.create_dataset("last_tip", data=np.asarray(adapter.last_tip, dtype=np.float64))
-    if adapter.achieved is not None:
-        group.create_dataset("achieved", data=np.asarray(adapter.achieved, dtype=np.float64))
-    records = [dataclasses.asdict(a) for a in getattr(stepper, "adaptations", [])]
-    group.attrs["adaptations"] = json.dumps(records)
+    group.attrs["vertex_density"], group.attrs["vertex_density_measured"] = state["vertex_density"]
+    group.attrs["size_floor_ratio"] = float(state["size_floor_ratio"])  # learned like the density
+    if state["last_tip"] is not None:
+        group.create_dataset("last_tip", data=np.asarray(state["last_tip"], dtype=np.float64))
+    if state["achieved"] is not None:
+        group.create_dataset("achieved", data=np.asarray(state["achieved"], dtype=np.float64))
+    group.attrs["adaptations"] = json.dumps([dataclasses.asdict(a) for a in state["adaptations"]])
 
 
 # -- reading ----------------------------------------------------------------------------------
@@ -207,62 +227,36 @@ def _read_adapter(group: h5py.Group) -> dict[str, Any]:
 def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
     """Put a loaded checkpoint into ``stepper`` (a stepper of the same scene).
 
-    A stepper built on ``state.build_mesh()`` keeps its spaces; any other stepper is moved to
-    the checkpoint's mesh first (``stepper._setup``, as after a remesh). Factorizations are
-    rebuilt on the next step.
+    A stepper on a mesh equal to the checkpoint's keeps its mesh; any other stepper moves to
+    the checkpoint's mesh (:meth:`PhaseFieldStepper.load_state`). Factorizations are rebuilt
+    on the next step.
     """
     if scene_hash(stepper.scene) != state.scene_hash:
         raise CheckpointError(f"checkpoint {str(state.path)!r} was written for another scene than "
                               f"the stepper's ({stepper.scene.name!r})")
-    if not MeshArrays.of(stepper.mesh).same_as(state.mesh_arrays):
-        stepper._setup(state.build_mesh())
+    same = MeshArrays.of(stepper.mesh).same_as(state.mesh_arrays)
     for name, stored in state.fields.items():
-        gf = getattr(stepper, name)
-        if not stored.matches(gf.space):
-            mine = StoredField.of(gf)
+        mine = getattr(stepper, name)
+        if same and not stored.matches(mine.space):
             raise CheckpointError(f"checkpoint {str(state.path)!r}: field {name!r} is "
-                                  f"{stored.describe()}, the stepper's is {mine.describe()}")
-        gf.vec.FV().NumPy()[:] = stored.values
-    stepper.k = state.k
-    stepper.ticks = state.ticks
-    stepper.level = state.level
-    stepper.time.Set(stepper.t)
-    stepper.nucleus = None if state.nucleus is None else np.array(state.nucleus)
-    stepper.previous_tip = None if state.previous_tip is None else np.array(state.previous_tip)
-    stepper._crack_cache = None  # the tip of the restored z, found with the restored previous tip
-    _restore_adapter(stepper, state)
-
-
-def _restore_adapter(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
-    adapter = getattr(stepper, "adapter", None)
-    if (adapter is None) != (state.adapter is None):
-        raise CheckpointError(f"checkpoint {str(state.path)!r} and the stepper disagree on "
-                              "whether the mesh adapts")
-    if adapter is None or state.adapter is None:
-        return
-    saved = state.adapter
-    adapter.eta_total = saved["eta_total"]
-    adapter.last_tip = None if saved["last_tip"] is None else np.array(saved["last_tip"])
-    adapter.achieved = saved["achieved"]
-    if saved.get("vertex_density") is not None:  # absent in older checkpoints
-        adapter.density.value, adapter.density.measured = saved["vertex_density"]
-    adapter.floor.ratio = saved.get("size_floor_ratio", 1.0)
-    if saved["adaptations"]:
-        from ..mesh.adapter import Adaptation
-        stepper.adaptations = [Adaptation(**record) for record in saved["adaptations"]]
-    else:
-        stepper.adaptations = []
+                                  f"{stored.describe()}, the stepper's is "
+                                  f"{StoredField.of(mine).describe()}")
+    try:
+        stepper.load_state(state.stepper_state(stepper.mesh if same else None))
+    except ValueError as err:
+        raise CheckpointError(f"checkpoint {str(state.path)!r}: {err}") from None
 
 
 def resume(path: str | Path, scene: Scene) -> "PhaseFieldStepper":
-    """A stepper of ``scene`` continuing from the checkpoint at ``path``."""
+    """A stepper of ``scene`` continuing from the checkpoint at ``path`` (no initial solve)."""
     from ..solve.stepper import PhaseFieldStepper
 
     state = load_checkpoint(path, scene)
-    stepper = PhaseFieldStepper(scene, mesh=state.build_mesh())
-    restore(stepper, state)
-    return stepper
+    try:
+        return PhaseFieldStepper.from_state(scene, state.stepper_state())
+    except ValueError as err:
+        raise CheckpointError(f"checkpoint {str(path)!r}: {err}") from None
 
 
 __all__ = ["IGNORED_KEYS", "CheckpointError", "CheckpointState", "load_checkpoint", "restore",
-           "resume", "save_checkpoint", "scene_hash"]
+           "resume", "save_checkpoint", "save_state", "scene_hash"]

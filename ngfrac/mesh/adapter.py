@@ -15,8 +15,10 @@ from __future__ import annotations
 import logging
 import math
 import time
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from functools import partial
+from typing import Any, Callable
 
 import numpy as np
 import ngsolve as ngs
@@ -27,7 +29,10 @@ from ..physics.cracks import crack_direction
 from .domains import _on_boundary, netgen_geometry
 from .remesh import (SIZE_RATIO, ElementGeometry, SizeFloor, VertexDensity, adapt_mesh,
                       edge_numbers, size_field_from_indicator)
+from ..physics.crack_models import crack_model
 from ..solve.nodal import LagrangeNodes
+from ..solve.spaces import MeshFields
+from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 from ..scene import Scene
 
 log = logging.getLogger(__name__)
@@ -137,9 +142,9 @@ class MeshAdapter:
         self.achieved: tuple[float, float] | None = None
         self._cache: tuple[ngs.Mesh, ElementGeometry, np.ndarray] | None = None
         self.eta_total = math.nan
-        self.reason = ""
-        """Why the next mesh change is wanted (set by :meth:`wants_new_mesh`; the stepper
-        records it with the change and clears it)."""
+        self.crack_model = crack_model(scene.phase_field.model)
+        self.adaptations: list[Adaptation] = []
+        """The mesh changes so far."""
         self.density = VertexDensity()
         """Netgen's vertex-count constant, learned from this run's meshes (one Netgen call
         per change instead of two)."""
@@ -236,8 +241,8 @@ class MeshAdapter:
         return (float(band.max()) if len(band) else 0.0, float(core.max()) if len(core) else 0.0)
 
     def wants_new_mesh(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z_values: np.ndarray,
-                       tip: np.ndarray) -> bool:
-        """True when the crack has outgrown the fine part of the mesh made last time.
+                       tip: np.ndarray) -> str | None:
+        """Why the crack has outgrown the fine part of the mesh made last time, or None.
 
         That is: the tip moved by more than half the tip margin or reached the boundary (not
         once it has stopped there, :attr:`tip_stopped`), or the core (band) of the crack reached elements
@@ -245,24 +250,26 @@ class MeshAdapter:
         after the last mesh change (the cap may have kept those above h_crack, h_band).
         Cheap (numpy on cached arrays), so it can run every step.
         """
+        reason = self._reason(mesh, nodes, z_values, tip)
+        if reason is not None:
+            log.info("new mesh wanted: %s", reason)
+        return reason
+
+    def _reason(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z_values: np.ndarray,
+                tip: np.ndarray) -> str | None:
         if self.last_tip is None or self.achieved is None:
-            return self._because("first mesh")
+            return "first mesh"
         if not self.tip_stopped and np.all(np.isfinite(tip)):
             if np.linalg.norm(tip - self.last_tip) > self.sizes.tip_margin / 2:
-                return self._because("tip moved")
+                return "tip moved"
             if self._may_stop_at_boundary and self._at_boundary(tip):
-                return self._because("tip reached the boundary")  # one last mesh for the cut
+                return "tip reached the boundary"  # one last mesh for the cut
         band, core = self._band_sizes(mesh, nodes, z_values)
         if band > BAND_GROWTH * self.achieved[0]:
-            return self._because(f"band reached h = {band:.3g} (had {self.achieved[0]:.3g})")
+            return f"band reached h = {band:.3g} (had {self.achieved[0]:.3g})"
         if core > CORE_GROWTH * self.achieved[1]:
-            return self._because(f"core reached h = {core:.3g} (had {self.achieved[1]:.3g})")
-        return False
-
-    def _because(self, reason: str) -> bool:
-        self.reason = reason
-        log.info("new mesh wanted: %s", reason)
-        return True
+            return f"core reached h = {core:.3g} (had {self.achieved[1]:.3g})"
+        return None
 
     def remember(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z_values: np.ndarray,
                  tip: np.ndarray) -> None:
@@ -296,3 +303,130 @@ class MeshAdapter:
         done = time.perf_counter()
         return new, {"estimate_s": estimated - started, "mark_s": marked - estimated,
                      "remesh_s": done - marked}
+
+    # -- one mesh change ----------------------------------------------------------------------
+    def change(self, fields: MeshFields, tip: np.ndarray, step: int, reason: str,
+               rebuild: Callable[[ngs.Mesh], MeshFields],
+               relax: Callable[[MeshFields], np.ndarray] | None = None,
+               solves: Callable[[], AbstractContextManager] = nullcontext,
+               ) -> tuple[MeshFields, Adaptation]:
+        """Estimate, size, remesh, transfer u and z, relax the core, remember: one mesh change.
+
+        Parameters
+        ----------
+        fields : MeshFields
+            The current mesh and fields.
+        tip : numpy.ndarray
+            The crack tip (NaN when unknown).
+        step : int
+            The step counter (recorded).
+        reason : str
+            Why (:meth:`wants_new_mesh`, or "requested").
+        rebuild : callable
+            ``rebuild(mesh)`` returns new (zero) fields on ``mesh`` and sets up the
+            sub-problems on them.
+        relax : callable, optional
+            ``relax(fields)`` returns z_trial at the nodes after one z-sub-step on the new
+            fields (for ``adaptivity.relax_core``).
+        solves : callable
+            The context of estimating and remeshing (:class:`ngfrac.solve.threads.ThreadPolicy`).
+
+        Returns
+        -------
+        (MeshFields, Adaptation)
+            The fields on the new mesh (u, u_prev and z transferred) and what the change did.
+        """
+        eps = self.scene.phase_field.epsilon
+        length_before = crack_length(fields.z, eps, self.crack_model)
+        with solves():
+            mesh, times = self.new_mesh(fields.mesh, fields.nodes, fields.z, tip)
+        started = time.perf_counter()
+        new = rebuild(mesh)
+        transfer_fields(fields, new)
+        length_after = crack_length(new.z, eps, self.crack_model)
+        if relax is not None and self.settings.relax_core:
+            self._relax_core(new, relax(new), tip)
+        times["transfer_s"] = time.perf_counter() - started
+        self.remember(new.mesh, new.nodes, new.z_values(), tip)
+        record = Adaptation(step=step, nv_before=fields.mesh.nv, nv_after=mesh.nv,
+                            eta_total=self.eta_total, crack_length_before=length_before,
+                            crack_length_after=length_after, reason=reason, **times)
+        self.adaptations.append(record)
+        log.info("step %d: new mesh %d -> %d vertices in %.2f s", step, fields.mesh.nv,
+                 mesh.nv, sum(times.values()))
+        return new, record
+
+    def _relax_core(self, fields: MeshFields, trial: np.ndarray, tip: np.ndarray) -> None:
+        """Give the crack back the values the scheme gives it on the new mesh: where the
+        transferred z >= 1/2 and one z-sub-step opens it (z_trial >= :data:`OPEN_LEVEL`),
+        outside the tip disc, z = max(z_trial, z) (never decreasing, at most 1).
+
+        Interpolation lowers z where the new nodes miss the ridge (z = 1 on a line), and the
+        crack then carries stress. Off by default; docs/adaptivity.md has why.
+        """
+        old = fields.z_values()
+        relax = (trial >= OPEN_LEVEL) & (old >= 0.5)
+        if np.all(np.isfinite(tip)):
+            distance = np.linalg.norm(fields.nodes.points - tip[: fields.mesh.dim], axis=1)
+            relax &= distance > self.sizes.tip_margin
+        new = old.copy()
+        new[relax] = np.minimum(1.0, np.maximum(trial[relax], old[relax]))
+        fields.nodes.assign(fields.z, new)
+
+    def resolve_initial(self, fields: MeshFields, tip: Callable[[MeshFields], np.ndarray],
+                        initial_state: Callable[[ngs.Mesh], MeshFields],
+                        solves: Callable[[], AbstractContextManager] = nullcontext,
+                        ) -> MeshFields:
+        """Resolve z0 before the first step: :data:`INITIAL_PASSES` times a new mesh for the
+        current z, on which ``initial_state(mesh)`` sets z0 from its formula and solves u0."""
+        for _ in range(INITIAL_PASSES):
+            with solves():
+                mesh, _ = self.new_mesh(fields.mesh, fields.nodes, fields.z, tip(fields))
+            fields = initial_state(mesh)
+        self.remember(fields.mesh, fields.nodes, fields.z_values(), tip(fields))
+        return fields
+
+    # -- state (checkpoints) ------------------------------------------------------------------
+    def state(self) -> dict[str, Any]:
+        """What decides the next mesh changes: the estimator total, the tip and band sizes of
+        the last change, and the learned vertex density and size floor."""
+        return {"eta_total": float(self.eta_total),
+                "last_tip": None if self.last_tip is None else np.array(self.last_tip, dtype=float),
+                "achieved": None if self.achieved is None else tuple(float(v) for v in self.achieved),
+                "vertex_density": (float(self.density.value), bool(self.density.measured)),
+                "size_floor_ratio": float(self.floor.ratio)}
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`state` (keys absent in older checkpoints keep their defaults)."""
+        self.eta_total = state["eta_total"]
+        self.last_tip = None if state.get("last_tip") is None else np.array(state["last_tip"])
+        self.achieved = state.get("achieved")
+        if state.get("vertex_density") is not None:
+            self.density.value, self.density.measured = state["vertex_density"]
+        self.floor.ratio = state.get("size_floor_ratio", 1.0)
+        self.adaptations = [a if isinstance(a, Adaptation) else Adaptation(**a)
+                            for a in state.get("adaptations", [])]
+
+
+INITIAL_PASSES = 3
+"""Mesh changes that resolve the initial crack's profile before the first step."""
+OPEN_LEVEL = 0.95
+"""After a mesh change z is restored where one z-sub-step gives at least this (the open crack)."""
+
+
+def transfer_fields(old: MeshFields, new: MeshFields) -> None:
+    """u and z of ``old`` onto ``new`` (u_prev = u), z clipped to [0, 1].
+
+    When u and z share their Lagrange nodes (a scalar u of z's order) the nodes are located in
+    the old mesh once and both are evaluated there; otherwise
+    :func:`~ngfrac.mesh.transfer.transfer_phase_field` and an interpolating ``Set`` for u.
+    """
+    if new.u.dim == 1 and new.fes_u.globalorder == new.fes_z.globalorder:
+        located = locate(old.mesh, new.nodes.points)
+        new.nodes.assign(new.z, np.clip(evaluate(old.z, located), 0.0, 1.0))
+        new.nodes.assign(new.u, evaluate(old.u, located))
+    else:
+        z_new, _ = transfer_phase_field(old.z, old.z, new.fes_z)
+        new.z.vec.data = z_new.vec
+        new.u.vec.data = transfer(old.u, new.fes_u, method="set").vec
+    new.u_prev.vec.data = new.u.vec

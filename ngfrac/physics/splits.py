@@ -64,7 +64,7 @@ from typing import Any, Callable, Iterator
 import ngsolve as ngs
 import numpy as np
 
-from ..solve.linear import iterations as solver_iterations, u_inverse, update
+from ..solve.linear import UOperator, iterations as solver_iterations
 from ..solve.threads import integrate, parallel, serial
 
 log = logging.getLogger(__name__)
@@ -337,14 +337,12 @@ class NewtonSolver:
         self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
         self._free = np.array(freedofs, dtype=bool)  # element by element: once, not per solve
         self.rtol, self.max_iterations = rtol, max_iterations
-        self._inv = None
+        self._operator = UOperator(a, freedofs, inverse, preconditioner)
+        self.last: NewtonResult | None = None
+        """The result of the last :meth:`solve`."""
 
     def _factorize(self) -> Any:
-        if self._inv is None:
-            self._inv = u_inverse(self.a, self.freedofs, self.inverse, self.preconditioner)
-        else:
-            update(self._inv)
-        return self._inv
+        return self._operator.factorize()
 
     def total_energy(self, rhs: ngs.BaseVector | None) -> float:
         """E at the current u."""
@@ -357,7 +355,7 @@ class NewtonSolver:
         converge."""
         a, vec = self.a, self.u.vec
         residual, step, start = vec.CreateVector(), vec.CreateVector(), vec.CreateVector()
-        result = NewtonResult(0)
+        result = self.last = NewtonResult(0)
         for iteration in range(self.max_iterations + 1):
             # BDDC (u_solver = 'cg') factorizes inside the assembly: no threads for it
             with parallel() if self.preconditioner is None else self.solves():

@@ -17,10 +17,16 @@ of that solve (assembled with the z it used, z^{k-1} inside a step).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import ngsolve as ngs
 
 from ..solve.threads import integrate
+
+if TYPE_CHECKING:
+    from ..scene import Load
+    from ..solve.u_problem import DisplacementProblem
 
 
 def indicator(fes: ngs.FESpace, boundary: str, component: int = 0) -> ngs.GridFunction:
@@ -56,29 +62,17 @@ def reaction(residual: ngs.BaseVector, fes: ngs.FESpace, boundary: str,
     return forces
 
 
-def residual(stepper) -> ngs.BaseVector:
-    """``R = A u - (1/dt) M u_prev - f`` with the stepper's assembled u-forms (A holds alpha1/dt M)."""
-    try:
-        matrix = stepper.a_u.mat
-    except TypeError:  # not assembled yet: before the first step, or right after a new mesh
-        stepper.a_u.Assemble()
-        matrix = stepper.a_u.mat
-    r = stepper.u.vec.CreateVector()
-    r.data = matrix * stepper.u.vec
-    if stepper.m_u is not None:  # m_u holds alpha1 M; the step's 1/dt is a Parameter
-        r.data -= stepper.inv_dt.Get() * (stepper.m_u.mat * stepper.u_prev.vec)
-    if stepper.f_u is not None:
-        r.data -= stepper.f_u.vec
-    return r
-
-
-def reaction_forces(stepper, boundaries: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+def reaction_forces(problem: "DisplacementProblem", loads: tuple["Load", ...],
+                    boundaries: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
     """The reaction force on each loaded boundary, one entry per component of u.
 
     Parameters
     ----------
-    stepper : PhaseFieldStepper
-        After ``solve_u`` (or ``step``), before any mesh change.
+    problem : DisplacementProblem
+        The u-sub-problem (:mod:`ngfrac.solve.u_problem`) after its solve, before any mesh
+        change: its residual holds the reactions.
+    loads : tuple of Load
+        The scene's loads.
     boundaries : tuple of str, optional
         Loaded boundaries to report; all loaded boundaries by default.
 
@@ -87,12 +81,12 @@ def reaction_forces(stepper, boundaries: tuple[str, ...] | None = None) -> dict[
     dict
         boundary -> array of (Fx, Fy) (mode III: (Fz,), the out-of-plane force).
     """
-    loads = {load.boundary: load for load in stepper.scene.loads}
-    r = residual(stepper)
+    by_name = {load.boundary: load for load in loads}
+    r = problem.residual()
     out = {}
-    for name in boundaries or tuple(loads):
-        constrained = tuple(i for i, free in enumerate(loads[name].free) if not free)
-        out[name] = reaction(r, stepper.fes_u, name, constrained, getattr(stepper, "indicators", None))
+    for name in boundaries or tuple(by_name):
+        constrained = tuple(i for i, free in enumerate(by_name[name].free) if not free)
+        out[name] = reaction(r, problem.fields.fes_u, name, constrained, problem.indicators)
     return out
 
 
@@ -104,16 +98,16 @@ def boundary_mean(u: ngs.GridFunction, boundary: str) -> np.ndarray:
     return np.atleast_1d(np.asarray(integrate(u, mesh, vb=ngs.BND, definedon=region))) / length
 
 
-def reaction_columns(stepper) -> dict[str, float]:
+def reaction_columns(problem: "DisplacementProblem", loads: tuple["Load", ...]) -> dict[str, float]:
     """History columns: ``F<c>_<boundary>`` and ``u<c>_<boundary>`` for each loaded boundary.
 
     ``c`` is x, y (plane models) or z (mode III, out of plane); ``u<c>`` is the boundary mean
     of u, which is the imposed displacement for a uniform load.
     """
-    names = stepper.model.component_names
+    names = problem.model.component_names
     row: dict[str, float] = {}
-    for boundary, force in reaction_forces(stepper).items():
-        mean = boundary_mean(stepper.u, boundary)
+    for boundary, force in reaction_forces(problem, loads).items():
+        mean = boundary_mean(problem.fields.u, boundary)
         row.update({f"F{c}_{boundary}": float(force[i]) for i, c in enumerate(names)})
         row.update({f"u{c}_{boundary}": float(mean[i]) for i, c in enumerate(names)})
     return row

@@ -54,3 +54,37 @@ def iterations(inverse: Any) -> int:
     if inverse.iterations >= CG_MAXITER:
         raise RuntimeError(f"CG did not reach the tolerance {CG_TOL:g} in {CG_MAXITER} iterations")
     return int(inverse.iterations)
+
+
+class UOperator:
+    """The inverse of an assembled u-matrix, made at the first :meth:`factorize` and
+    numerically updated at the later ones (or CG with the registered BDDC).
+
+    Parameters
+    ----------
+    form : ngsolve.BilinearForm
+    freedofs : ngsolve.BitArray
+    solver : str
+        A ``discretization.u_solver``.
+    preconditioner : optional
+        :func:`register_preconditioner` of ``form`` (for ``"cg"``).
+    """
+
+    def __init__(self, form: ngs.BilinearForm, freedofs: ngs.BitArray, solver: str,
+                 preconditioner: Any | None = None) -> None:
+        self.form, self.freedofs, self.solver = form, freedofs, solver
+        self.preconditioner = preconditioner
+        self.inverse: Any = None
+
+    def factorize(self) -> Any:
+        """After an assembly of the form: the operator applying its inverse."""
+        if self.inverse is None:
+            self.inverse = u_inverse(self.form, self.freedofs, self.solver, self.preconditioner)
+        else:
+            update(self.inverse)
+        return self.inverse
+
+    def iterations(self) -> int:
+        """CG iterations of the last application (0 for a direct solver); raises
+        RuntimeError if CG stopped at its iteration limit."""
+        return iterations(self.inverse)

@@ -19,6 +19,8 @@ class PhaseTimer:
     """
 
     def __init__(self) -> None:
+        self.started = time.perf_counter()
+        """When the timer was made (``perf_counter``)."""
         self.seconds: dict[str, float] = {}
         self.calls: dict[str, int] = {}
 

@@ -20,12 +20,13 @@ faster on many cores, not reproducible bitwise.
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
+from dataclasses import dataclass
 from typing import Any, Iterator
 
 import ngsolve as ngs
 
-__all__ = ["integrate", "parallel", "serial"]
+__all__ = ["ThreadPolicy", "integrate", "parallel", "serial"]
 
 
 @contextmanager
@@ -52,6 +53,30 @@ def serial() -> Iterator[None]:
         yield
     finally:
         ngs.SetNumThreads(threads)
+
+
+@dataclass(frozen=True)
+class ThreadPolicy:
+    """Where a run uses NGSolve's threads (``discretization.threaded_solves``).
+
+    Reproducible (the default): assembly in the TaskManager, factorizations, solves,
+    estimators and remeshing with one thread. Threaded: the whole step in the TaskManager.
+    """
+
+    threaded_solves: bool = False
+
+    def step(self) -> AbstractContextManager:
+        """The context of a whole step: the TaskManager when solves are threaded, else none."""
+        return parallel() if self.threaded_solves else nullcontext()
+
+    def solves(self) -> AbstractContextManager:
+        """The context of factorizations, solves, estimators and remeshing."""
+        return nullcontext() if self.threaded_solves else serial()
+
+    def assembly(self, preconditioner: object = None) -> AbstractContextManager:
+        """Threads for an assembly, unless it also sets up a registered preconditioner
+        (BDDC factorizes inside the assembly)."""
+        return parallel() if preconditioner is None else self.solves()
 
 
 def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,

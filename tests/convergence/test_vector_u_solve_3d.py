@@ -87,7 +87,7 @@ def errors(order, h):
     # the manufactured f is a CoefficientFunction, not a scene expression: set the u-form's
     # right-hand side directly (the same form the stepper builds from material.body_force)
     v = stepper.fes_u.TestFunction()
-    stepper.f_u = ngs.LinearForm(manufactured_force() * v * stepper.dx)
+    stepper.u_problem.f_u = ngs.LinearForm(manufactured_force() * v * stepper.dx)
     with ngs.TaskManager():
         stepper.solve_u()
     u_exact = exact()

@@ -208,7 +208,7 @@ def test_elasticity_3d_model_and_uniaxial_reaction():
     assert isinstance(model, Elasticity3D) and model.component_names == ("x", "y", "z")
     stepper = PhaseFieldStepper(scene)
     stepper.step()
-    forces = reaction_forces(stepper)
+    forces = reaction_forces(stepper.u_problem, stepper.scene.loads)
     eta, E = scene.phase_field.residual_stiffness, scene.material.E
     expected = (1 + eta) * E * 0.01 * (1.0 * 0.5) / 1.0
     assert forces["top"][1] == pytest.approx(expected, rel=1e-9)

@@ -14,7 +14,7 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.io.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoint, restore, resume,
-                               save_checkpoint)
+                               save_checkpoint, save_state)
 from ngfrac.io.results import MeshArrays
 from ngfrac.solve.stepper import PhaseFieldStepper
 
@@ -132,32 +132,29 @@ def test_restart_after_a_mesh_change(tmp_path):
 
 def test_adaptivity_state_round_trip(scene, reference, tmp_path):
     """What decides the next mesh change (last tip, achieved sizes, eta, the learned vertex
-    constant and size floor) and where a crack without an initial one started are restored."""
-    from types import SimpleNamespace
+    constant and size floor, the changes so far) and where a crack without an initial one
+    started are restored."""
+    import dataclasses
 
-    from ngfrac.mesh.remesh import SizeFloor, VertexDensity
-
-    def with_adapter(stepper, tip, achieved, eta, density=None, floor=None):
-        stepper.adapter = SimpleNamespace(last_tip=tip, achieved=achieved, eta_total=eta,
-                                          density=density or VertexDensity(),
-                                          floor=floor or SizeFloor())
-        stepper.adaptations = []
-        return stepper
+    from ngfrac.mesh.adapter import Adaptation
 
     state = load_checkpoint(reference[1], scene)
     source = PhaseFieldStepper(scene, mesh=state.build_mesh())
     restore(source, state)
-    with_adapter(source, np.array([0.31, 0.5]), (0.01, 0.004), 0.125, VertexDensity(1.37, True),
-                 SizeFloor(0.83))
-    source.nucleus = np.array([0.25, 0.75])
-    save_checkpoint(source, tmp_path / "adaptive.h5")
-    target = with_adapter(PhaseFieldStepper(scene, mesh=state.build_mesh()), None, None, np.nan)
-    restore(target, load_checkpoint(tmp_path / "adaptive.h5", scene))
-    np.testing.assert_array_equal(target.adapter.last_tip, [0.31, 0.5])
-    assert target.adapter.achieved == (0.01, 0.004) and target.adapter.eta_total == 0.125
-    assert (target.adapter.density.value, target.adapter.density.measured) == (1.37, True)
-    assert target.adapter.floor.ratio == 0.83
-    np.testing.assert_array_equal(target.nucleus, [0.25, 0.75])
+    change = Adaptation(step=3, nv_before=100, nv_after=120, eta_total=0.2,
+                        crack_length_before=1.0, crack_length_after=0.99, estimate_s=0.1,
+                        mark_s=0.0, remesh_s=0.5, transfer_s=0.1, reason="tip moved")
+    adapter = {"eta_total": 0.125, "last_tip": np.array([0.31, 0.5]), "achieved": (0.01, 0.004),
+               "vertex_density": (1.37, True), "size_floor_ratio": 0.83, "adaptations": [change]}
+    adaptive = dataclasses.replace(source.state(), adapter=adapter, nucleus=np.array([0.25, 0.75]))
+    save_state(adaptive, scene, tmp_path / "adaptive.h5")
+    restored = load_checkpoint(tmp_path / "adaptive.h5", scene).stepper_state()
+    np.testing.assert_array_equal(restored.adapter["last_tip"], [0.31, 0.5])
+    assert restored.adapter["achieved"] == (0.01, 0.004) and restored.adapter["eta_total"] == 0.125
+    assert restored.adapter["vertex_density"] == (1.37, True)
+    assert restored.adapter["size_floor_ratio"] == 0.83
+    assert restored.adapter["adaptations"] == [change]
+    np.testing.assert_array_equal(restored.nucleus, [0.25, 0.75])
     with pytest.raises(CheckpointError, match="disagree on whether the mesh adapts"):
         restore(PhaseFieldStepper(scene, mesh=state.build_mesh()),
                 load_checkpoint(tmp_path / "adaptive.h5", scene))

@@ -37,7 +37,7 @@ def test_cg_matches_the_direct_solver(split):
     assert direct[-1, 3] > 0.55, "the slit did not grow: the test needs a growing crack"
     np.testing.assert_allclose(iterative[:, :3], direct[:, :3], rtol=1e-6)
     if split == "none":
-        assert 0 < stepper.u_iterations < 1000
+        assert 0 < stepper.u_problem.iterations < 1000
 
 
 def test_u_solver_is_validated():

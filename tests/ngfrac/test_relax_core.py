@@ -33,10 +33,10 @@ def force_jumps(relax: bool) -> list[float]:
     with ngs.TaskManager():
         for _ in range(3):
             stepper.solve_u()
-            before = reaction_columns(stepper)["Fy_top"]
+            before = reaction_columns(stepper.u_problem, stepper.scene.loads)["Fy_top"]
             stepper.adapt()
             stepper.solve_u()
-            after = reaction_columns(stepper)["Fy_top"]
+            after = reaction_columns(stepper.u_problem, stepper.scene.loads)["Fy_top"]
             jumps.append(after / before - 1)
     return jumps
 

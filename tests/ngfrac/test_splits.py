@@ -98,7 +98,7 @@ def test_newton_converges_quadratically():
     stepper = PhaseFieldStepper(scene("miehe", ["0.01*t*y", "0.01*t*y"], n_steps=1, order=2,
                                       gamma="1.0"))
     stepper.step()
-    residuals = np.array(stepper.newton.residuals)
+    residuals = np.array(stepper.u_problem.newton.residuals)
     table = ", ".join(f"{r:.2e}" for r in residuals)
     assert residuals[-1] <= 1e-10, table
     above = residuals[residuals > 1e-12]

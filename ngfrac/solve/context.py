@@ -1,0 +1,24 @@
+"""What the sub-problems of one run share: the time and 1/dt of the step, threads, the timer."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import ngsolve as ngs
+
+from .profiling import PhaseTimer
+from .threads import ThreadPolicy
+
+
+@dataclass(frozen=True, eq=False)
+class StepContext:
+    """The Parameters a step sets and the sub-problems' forms read, and how they run.
+
+    ``time`` is t_k (boundary values, body force), ``inv_dt`` is 1/dt of the step (the
+    alpha1 and alpha2 terms); ``threads`` says where NGSolve's threads are used and ``timer``
+    collects the time of each phase.
+    """
+
+    time: ngs.Parameter = field(default_factory=lambda: ngs.Parameter(0.0))
+    inv_dt: ngs.Parameter = field(default_factory=lambda: ngs.Parameter(1.0))
+    threads: ThreadPolicy = field(default_factory=ThreadPolicy)
+    timer: PhaseTimer = field(default_factory=PhaseTimer)

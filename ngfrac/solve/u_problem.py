@@ -1,0 +1,214 @@
+"""The u-sub-problem of one step: the degraded elastic equation for the current z.
+
+    alpha1 (u - u_prev)/dt = div((g(z) + eta) sigma[u]) + f      u = g_D(t) on Gamma_D
+
+One linear solve (a factorization made once per mesh and numerically updated after each
+assembly, or CG with BDDC), or Newton on the energy with a tension/compression split
+(:mod:`ngfrac.physics.splits`). Its residual gives the reaction forces
+(:mod:`ngfrac.post.reactions`).
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Any, Iterator
+
+import numpy as np
+import ngsolve as ngs
+
+from ..physics.crack_models import CrackModel
+from ..physics.splits import NewtonResult, NewtonSolver, make_split, tangent_integrators
+from ..scene import Scene
+from .linear import UOperator, register_preconditioner
+from .context import StepContext
+from .spaces import MeshFields
+
+
+class SolverError(RuntimeError):
+    """A linear solve failed or produced non-finite values."""
+
+
+class DisplacementProblem:
+    """Forms, solver and residual of the u-sub-step on one :class:`MeshFields`.
+
+    Parameters
+    ----------
+    fields : MeshFields
+        u is solved for in place; z and u_prev are read.
+    scene : Scene
+    model : ElasticModel
+        The elastic model (:func:`ngfrac.physics.elastic.make_model`).
+    crack_model : CrackModel
+        Its degradation g(z) multiplies the stress.
+    context : StepContext
+        The step's time and 1/dt, threads and timer.
+    """
+
+    def __init__(self, fields: MeshFields, scene: Scene, model: Any, crack_model: CrackModel,
+                 context: StepContext) -> None:
+        self.fields, self.model, self.context = fields, model, context
+        time, inv_dt = context.time, context.inv_dt
+        pf, disc = scene.phase_field, scene.discretization
+        self.eta = pf.residual_stiffness
+        fes, dx = fields.fes_u, fields.dx
+        self.dirichlet = DirichletValues(fes, model, model.boundary_values(fields.mesh, scene.loads, time))
+        self.split = make_split(model, scene.material.split)
+        self.degradation = crack_model.degradation(fields.z, self.eta)
+        u, v = fes.TnT()
+        stiffness = self.degradation * model.stress_strain(u, v)
+        if self.split is not None:  # nonlinear: a_u is the tangent at the current u
+            stiffness = self.split.tangent(fields.u, u, v, fields.z, self.eta)
+        if pf.alpha1 > 0:
+            stiffness = stiffness + pf.alpha1 * inv_dt * u * v
+        self.a_u = ngs.BilinearForm(fes, symmetric=True)
+        with tangent_integrators(self.split):
+            self.a_u += stiffness * dx
+        pre = register_preconditioner(self.a_u, disc.u_solver)  # before any assembly
+        self.linear = UOperator(self.a_u, fes.FreeDofs(), disc.u_solver, pre)
+        self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
+                    if pf.alpha1 > 0 else None)
+        self.body_force = model.body_force(scene.material, time)
+        self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
+        self._newton = self._newton_solver(pf.alpha1) if self.split is not None else None
+        self.indicators: dict = {}
+        """Reaction test functions of this mesh (:func:`ngfrac.post.reactions.reaction`)."""
+
+    @property
+    def iterations(self) -> int:
+        """CG iterations of the last linear solve (0 for a direct solver or before one)."""
+        return 0 if self.linear.inverse is None else self.linear.iterations()
+
+    @property
+    def newton(self) -> NewtonResult | None:
+        """The last Newton solve (with a split)."""
+        return None if self._newton is None else self._newton.last
+
+    def apply_boundary_values(self) -> None:
+        """Set u's Dirichlet dofs to the boundary values at the current time."""
+        self.dirichlet.apply(self.fields.u)
+
+    @contextmanager
+    def static(self) -> Iterator[None]:
+        """1/dt = 0 inside: :meth:`solve` then solves the elastic problem without the alpha1
+        term (the initial state u0), and :meth:`residual` is its residual."""
+        inv_dt = self.context.inv_dt.Get()
+        self.context.inv_dt.Set(0.0)
+        try:
+            yield
+        finally:
+            self.context.inv_dt.Set(inv_dt)
+
+    def solve(self, step: int | str = "?") -> None:
+        """The u-sub-step for the current z, time and u_prev; ``step`` names the step in
+        error messages. Raises :class:`SolverError`."""
+        self.apply_boundary_values()
+        if self.split is not None:
+            self._solve_newton(step)
+        else:
+            self._solve_linear(step)
+        if not np.all(np.isfinite(self.fields.u.vec.FV().NumPy())):
+            raise SolverError(f"the u-solve gave non-finite values at step {step}; "
+                              "raise phase_field.residual_stiffness or lower time.dt")
+
+    def _solve_linear(self, step: int | str) -> None:
+        with self.context.timer.phase("u: assemble"), self.context.threads.assembly(self.linear.preconditioner):
+            self.a_u.Assemble()
+            if self.f_u is not None:
+                self.f_u.Assemble()
+        with self.context.timer.phase("u: factorize"), self.context.threads.solves():
+            inverse = self.linear.factorize()
+        with self.context.timer.phase("u: solve"), self.context.threads.solves():
+            u = self.fields.u.vec
+            residual = u.CreateVector()
+            if self.m_u is not None:
+                residual.data = self.context.inv_dt.Get() * (self.m_u.mat * self.fields.u_prev.vec) \
+                    - self.a_u.mat * u
+            else:
+                residual.data = -self.a_u.mat * u
+            if self.f_u is not None:
+                residual.data += self.f_u.vec
+            u.data += inverse * residual
+            try:
+                self.linear.iterations()
+            except RuntimeError as err:
+                raise SolverError(f"the u-solve failed at step {step}: {err}; "
+                                  "set discretization.u_solver = 'sparsecholesky'") from None
+
+    def _solve_newton(self, step: int | str) -> None:
+        rhs = self.fields.u.vec.CreateVector()
+        rhs[:] = 0.0
+        if self.m_u is not None:
+            rhs.data = self.context.inv_dt.Get() * (self.m_u.mat * self.fields.u_prev.vec)
+        if self.f_u is not None:
+            self.f_u.Assemble()
+            rhs.data += self.f_u.vec
+        with self.context.timer.phase("u: newton"):
+            try:
+                self._newton.solve(rhs)
+            except RuntimeError as err:
+                raise SolverError(f"the u-solve (material.split = {self.split.kind!r}) failed at "
+                                  f"step {step}: {err}; lower time.dt") from None
+
+    def _newton_solver(self, alpha1: float) -> NewtonSolver:
+        """Newton for the split problem; alpha1 > 0 adds the energy of the alpha1 term (its
+        linear part is the solve's right-hand side)."""
+        f = self.fields
+        energy = self.split.elastic_density(f.u, f.z, self.eta)
+        if alpha1 > 0:
+            energy = energy + 0.5 * alpha1 * self.context.inv_dt * ngs.InnerProduct(f.u, f.u)
+        return NewtonSolver(self.a_u, f.u, energy, f.integration_order, f.fes_u.FreeDofs(),
+                            self.linear.solver, preconditioner=self.linear.preconditioner,
+                            solves=self.context.threads.solves)
+
+    def residual(self) -> ngs.BaseVector:
+        """``R = A u - (1/dt) M u_prev - f`` with the forms of the last solve (A holds
+        alpha1/dt M); zero at the free dofs, the reactions at the Dirichlet dofs."""
+        try:
+            matrix = self.a_u.mat
+        except TypeError:  # not assembled yet
+            self.a_u.Assemble()
+            matrix = self.a_u.mat
+        f = self.fields
+        r = f.u.vec.CreateVector()
+        r.data = matrix * f.u.vec
+        if self.m_u is not None:  # m_u holds alpha1 M; the step's 1/dt is a Parameter
+            r.data -= self.context.inv_dt.Get() * (self.m_u.mat * f.u_prev.vec)
+        if self.f_u is not None:
+            r.data -= self.f_u.vec
+        return r
+
+    def drive(self, u: ngs.GridFunction) -> ngs.CoefficientFunction:
+        """W of the z-equation at ``u``: sigma:e, or 2 psi+ with a split."""
+        return self.model.energy_density(u) if self.split is None else self.split.drive(u)
+
+    def elastic_density(self) -> ngs.CoefficientFunction:
+        """W with E_el = 1/2 int (g(z) + eta) W at the current u: sigma:e, or with a split
+        2 ((g + eta) psi+ + psi-) / (g + eta)."""
+        f = self.fields
+        if self.split is None:
+            return self.model.energy_density(f.u)
+        return 2 * self.split.elastic_density(f.u, f.z, self.eta) / self.degradation
+
+
+class DirichletValues:
+    """The Dirichlet values of u: interpolated into a GridFunction, copied to u's fixed dofs.
+
+    Parameters
+    ----------
+    fes : ngsolve.FESpace
+        The space of u.
+    model : ElasticModel
+        Interpolates the boundary values (``model.set_boundary``).
+    values : ngsolve.CoefficientFunction
+        The boundary values (they depend on the time Parameter).
+    """
+
+    def __init__(self, fes: ngs.FESpace, model: Any, values: Any) -> None:
+        self.model, self.values = model, values
+        self.gf = ngs.GridFunction(fes, "u_boundary")
+        # a numpy mask, once per mesh: the BitArray conversion cost a quarter of a u-solve
+        self.fixed = ~np.array(fes.FreeDofs(), dtype=bool)
+
+    def apply(self, u: ngs.GridFunction) -> None:
+        """Set u's Dirichlet dofs to the values at the current time."""
+        self.model.set_boundary(self.gf, self.values)
+        u.vec.FV().NumPy()[self.fixed] = self.gf.vec.FV().NumPy()[self.fixed]
