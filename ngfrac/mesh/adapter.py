@@ -71,12 +71,8 @@ class AdaptivitySizes:
     The tip disc (radius ``tip_margin`` = 4 eps, size ``h_tip`` = h_band by default) is where
     the crack runs before the next mesh change: a new mesh is made when the tip has moved by
     r/2 or the core (z >= 0.9) or band (z >= 0.1) reached elements 1.5x coarser than after the
-    last change. A disc at h_crack within 3 eps makes fewer changes (Fig. 2 demo: 28 against
-    47, adaptation 27 % against 36 % of the step time) and smoother tip paths, but under a
-    vertex cap its vertices are taken from the rest of the crack: against a reference it was
-    less accurate per second of run time (crack length 0.74 % in 67 s at cap 6,000 against
-    0.82 % in 38 s at cap 3,000 with this default, epsilon 0.04; docs/adaptivity.md). So it
-    is an option (``h_tip``, ``tip_margin``), not the default.
+    last change. A finer disc is an option, not the default (docs/adaptivity.md, "Design
+    measurements": less accurate per second under a vertex cap).
     """
 
     hmin: float
@@ -204,10 +200,9 @@ class MeshAdapter:
         The core (z >= 0.9) needs h_crack. Behind the tip it forms a few steps after the tip
         (z >= 0.5) has passed, ahead of it the crack is about to run: the lane covers
         ``tip_margin`` behind the tip (half width eps/2) and a wedge of that length ahead of it
-        (widening by 15 deg). With the tip disc at h_band alone, the Fig. 2 demo's core
-        reached coarser elements every 2-3 steps while the crack ran (46 changes in 300 steps
-        against 26 with the lane); a disc at h_crack costs ~9x the lane's vertices. False
-        everywhere when the direction is unknown (:func:`ngfrac.physics.cracks.crack_direction`).
+        (widening by 15 deg); it saves mesh changes at a fraction of a fine disc's vertices
+        (docs/adaptivity.md, "Design measurements"). False everywhere when the direction is
+        unknown (:func:`ngfrac.physics.cracks.crack_direction`).
         """
         s, eps = self.sizes, self.scene.phase_field.epsilon
         direction = crack_direction(nodes.points, z_values, tip, radius=2 * eps)

@@ -18,21 +18,13 @@ interpolation of the old field. For P1 both clip and max are no-ops (interpolati
 in [0, 1] with z >= bound stays so); for P2 they catch the over- and undershoots of the
 quadratic.
 
-Crack length across a transfer (exp(-d/eps) profile, P2, tests/ngfrac/test_transfer.py): the
-loss comes entirely from the kink at d = 0 when the meshes do not have edges on the crack:
-1.6 % per transfer at h = eps/2, 0.4 % with h = eps/8 where z >= 0.6, 0.3 % with eps/10
-(P1: 7 % and 2 %); ``GridFunction.Set`` instead overshoots by +1.1 % at eps/2. On
-crack-aligned meshes (``netgen_geometry(geometry, cracks)`` passed to the remesher) the loss
-is 0.02 % at h = eps/2. A growing crack is not aligned, so refine its core (z >= 0.6) to
-~eps/8 or accept ~3 % * h_core/eps per transfer.
+A transfer loses crack length where the new mesh has no edges on the crack (the kink of the
+profile at d = 0): refine the core; docs/adaptivity.md ("What a transfer costs") has the
+measured losses and timings. Use :func:`crack_length` before and after to see what a transfer
+did to the crack.
 
 Points the old mesh does not cover (none for rectangles; only for curved or moved
 boundaries) take the value at the nearest old vertex, with a warning.
-
-Timings (2 cores, ngsolve 6.2.2608): locating 100,000 points ``mesh(xs, ys)`` 0.13 s and
-evaluating a P2 field there 0.04 s; ``transfer_phase_field`` P2 to a 5,000-vertex mesh
-(~20,000 nodes) ~0.05 s; ``transfer`` of a P2 u ~0.05 s. Use :func:`crack_length` before and
-after to see what a transfer did to the crack.
 """
 from __future__ import annotations
 

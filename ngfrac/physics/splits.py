@@ -127,10 +127,8 @@ def _spectral_squares_3d(e: Any, h: Any, k: Any) -> Any:
     strains are positive) selecting the coefficient matrices Q+, left, right, never h or k.
 
     NGSolve evaluates the compiled integrand, coefficients included, once per pair of trial
-    and test gradient components (81 in 3D): an assembly costs ~15x Amor's (2.5 s against
-    0.16 s at 3,600 dofs, one thread). A form built while ``ngsolve.ngsglobals.
-    symbolic_integrator_uses_diff`` is True (it is read when the integrator is created) gets
-    the same matrix in 0.31 s.
+    and test gradient components (81 in 3D); build the form in :func:`tangent_integrators`
+    (docs/benchmarks.md, "The 3D spectral split", has the cost).
     """
     e1, e2, e3 = principal_strains_3d(e)
     identity = ngs.Id(3)
@@ -258,9 +256,8 @@ def tangent_integrators(split: EnergySplit | None) -> Iterator[None]:
 
     For the 3D spectral split they differentiate the integrand symbolically
     (``ngsglobals.symbolic_integrator_uses_diff``, read when an integrator is created): NGSolve
-    otherwise evaluates the whole tangent once per pair of gradient components. Measured on
-    one thread, 3,576 dofs, median of 5: 314 ms against 2,477 ms per assembly, the same matrix
-    to 2e-16 (no split 147 ms, Amor 164 ms, which it does not speed up).
+    otherwise evaluates the whole tangent once per pair of gradient components (about 8x
+    slower; docs/benchmarks.md, "The 3D spectral split").
     """
     enabled = split is not None and split.kind == "miehe" and split.dim == 3
     previous = ngs.ngsglobals.symbolic_integrator_uses_diff
