@@ -28,7 +28,7 @@ from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.crack_models import crack_model
 from ..post.crackset import CrackSet, NodeGraph, find_crack
 from ..post.diagnostics import element_sizes, energies
-from ..mesh.domains import build_mesh
+from ..mesh.domains import build_mesh, domain_of
 from ..physics.elastic import make_model
 from .nodal import LagrangeNodes
 from .profiling import PhaseTimer
@@ -148,7 +148,8 @@ class PhaseFieldStepper:
         self.inv_dt = ngs.Parameter(1.0 / scene.time.dt)
         self._started = time.perf_counter()
         self._polylines = [crack.points for crack in scene.cracks]
-        self._start_tip = (initial_tip(scene.cracks[0].points, self._on_boundary)
+        self.domain = domain_of(scene.geometry)
+        self._start_tip = (initial_tip(scene.cracks[0].points, self.domain.on_boundary)
                            if scene.cracks else None)
         self.nucleus: np.ndarray | None = None
         """With no initial crack: where z first reached 1/2 (the crack grows from there)."""
@@ -182,13 +183,6 @@ class PhaseFieldStepper:
     def scene(self, value: Scene) -> None:
         raise AttributeError("a stepper's scene cannot be changed: its forms, spaces and loads "
                              "were built from it; make a new PhaseFieldStepper(new_scene)")
-
-    def _on_boundary(self, point: np.ndarray) -> bool:
-        """Whether a point lies on the boundary of the scene's rectangle or box."""
-        g = self.scene.geometry
-        tol = 1e-10 * max(g.extent)
-        return any(abs(p - o) <= tol or abs(p - o - e) <= tol
-                   for p, o, e in zip(point, g.origin, g.extent))
 
     # -- set-up -----------------------------------------------------------------------------
     def _setup(self, mesh: ngs.Mesh) -> None:
