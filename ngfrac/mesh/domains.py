@@ -5,7 +5,7 @@ boundary, grids for checking expressions, and how to become a Netgen geometry wi
 initial cracks as interior lines (2D, :class:`Rectangle`) or interior faces (3D,
 :class:`Box`), so every mesh has edges or faces along them. The initial profile
 exp(-d/epsilon) has a kink on the crack; on an aligned mesh its P2 interpolant is smooth on
-each side and the surface energy is accurate (docs/adaptivity.md, "Crack-aligned meshes").
+each side and the surface energy is accurate (docs/theory.md, "Crack-aligned meshes").
 Nothing else in ngfrac does width/height arithmetic; :func:`domain_of` builds the domain of a
 scene's ``geometry`` section.
 """
