@@ -238,9 +238,12 @@ class SizeField:
     sizes: np.ndarray
     weights: np.ndarray
 
-    def predicted_vertices(self, density: float = VERTEX_DENSITY) -> float:
-        """``c * sum_p w_p / h_p^d``: the vertex count Netgen will roughly produce."""
-        return predict_vertices(self.sizes, self.weights, density=density, dim=self.points.shape[1])
+    def predicted_vertices(self, density: float | None = None) -> float:
+        """``c * sum_p w_p / h_p^d``: the vertex count Netgen will roughly produce (c: the
+        dimension's :attr:`MeshingConstants.vertex_density` unless given)."""
+        dim = self.points.shape[1]
+        c = meshing_constants(dim).vertex_density if density is None else density
+        return predict_vertices(self.sizes, self.weights, density=c, dim=dim)
 
 
 # -- the size field ---------------------------------------------------------------------------
