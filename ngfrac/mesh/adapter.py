@@ -17,7 +17,6 @@ import math
 import time
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
-from functools import partial
 from typing import Any, Callable
 
 import numpy as np
@@ -26,8 +25,8 @@ import ngsolve as ngs
 import estimators
 
 from ..physics.cracks import crack_direction
-from .domains import _on_boundary, netgen_geometry
-from .remesh import (SIZE_RATIO, ElementGeometry, SizeFloor, VertexDensity, adapt_mesh,
+from .domains import domain_of
+from .remesh import (MESHING_3D, ElementGeometry, SizeFloor, VertexDensity, adapt_mesh,
                       edge_numbers, size_field_from_indicator)
 from ..physics.crack_models import crack_model
 from ..solve.nodal import LagrangeNodes
@@ -86,14 +85,13 @@ class AdaptivitySizes:
 
     @classmethod
     def of(cls, scene: Scene) -> "AdaptivitySizes":
-        a, eps, g = scene.adaptivity, scene.phase_field.epsilon, scene.geometry
+        a, eps, g = scene.adaptivity, scene.phase_field.epsilon, domain_of(scene.geometry)
         h_crack = max(a.hmin, a.h_crack or eps / 10)
         h_band = max(a.hmin, a.h_band or eps / 4)
-        coarse = min(g.width, g.height) / 10
+        coarse = g.shortest_side / 10
         if g.dim == 3:  # the uniform start mesh of hmax must fit well under the cap
-            from .remesh3d import VERTEX_DENSITY_3D
-            volume = g.width * g.height * g.depth
-            coarse = max(g.shortest_side / 4, (4 * VERTEX_DENSITY_3D * volume / a.max_vertices) ** (1 / 3))
+            c = MESHING_3D.vertex_density
+            coarse = max(g.shortest_side / 4, (4 * c * g.measure / a.max_vertices) ** (1 / 3))
         tip_margin = a.tip_margin or 4 * eps
         lane = a.tip_lane and g.dim == 2
         return cls(hmin=a.hmin, hmax=a.hmax or coarse, h_crack=h_crack,
@@ -133,7 +131,8 @@ class MeshAdapter:
         self.scene = scene
         self.settings = scene.adaptivity
         self.sizes = AdaptivitySizes.of(scene)
-        self.geometry = netgen_geometry(scene.geometry, [c.points for c in scene.cracks])
+        self.domain = domain_of(scene.geometry)
+        self.geometry = self.domain.netgen_geometry([c.points for c in scene.cracks])
         self.last_tip: np.ndarray | None = None
         self.achieved: tuple[float, float] | None = None
         self._cache: tuple[ngs.Mesh, ElementGeometry, np.ndarray] | None = None
@@ -152,8 +151,7 @@ class MeshAdapter:
 
     def _at_boundary(self, point: np.ndarray) -> bool:
         """Whether a 2D point is within h_band of the rectangle's boundary."""
-        return bool(np.all(np.isfinite(point))) and _on_boundary(self.scene.geometry, point,
-                                                                 self.sizes.h_band)
+        return bool(np.all(np.isfinite(point))) and self.domain.on_boundary(point, self.sizes.h_band)
 
     @property
     def tip_stopped(self) -> bool:
@@ -284,17 +282,10 @@ class MeshAdapter:
         estimated = time.perf_counter()
         sizes = self.element_sizes(mesh, nodes, z, eta, tip if np.all(np.isfinite(tip)) else None)
         marked = time.perf_counter()
-        if mesh.dim == 3:  # 3D constants and Netgen options: ngfrac.mesh.remesh3d
-            from .remesh3d import adapt_mesh_3d
-            # Netgen gets sizes / SIZE_RATIO: this floor asks it for nothing below hmin (3D
-            # meshes are not checked against hmin afterwards, unlike 2D)
-            sizes = np.maximum(sizes, self.sizes.hmin * SIZE_RATIO)
-            adapt = partial(adapt_mesh_3d, density=self.density)
-        else:  # hmin is a floor of the delivered mesh (SizeFloor)
-            adapt = partial(adapt_mesh, density=self.density, hmin=self.sizes.hmin,
-                            floor=self.floor)
-        new = adapt(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
-                    max_vertices=self.settings.max_vertices)
+        # per-dimension constants (is hmin a checked floor?): ngfrac.mesh.remesh.MeshingConstants
+        new = adapt_mesh(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
+                         max_vertices=self.settings.max_vertices, density=self.density,
+                         hmin=self.sizes.hmin, floor=self.floor)
         done = time.perf_counter()
         return new, {"estimate_s": estimated - started, "mark_s": marked - estimated,
                      "remesh_s": done - marked}

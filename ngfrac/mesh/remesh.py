@@ -1,53 +1,23 @@
-"""Mesh change by regeneration: a local mesh-size field in, a new Netgen mesh out.
+"""Mesh change by regeneration: a local mesh-size field in, a new Netgen mesh out (2D and 3D).
 
 NGSolve refines (bisection) but cannot coarsen, so every adaptation builds a *new* mesh of the
-scene geometry from a mesh-size field: the field is sampled at points, each point restricts
-Netgen's local mesh size (``MeshingParameters.RestrictH``), and Netgen meshes from scratch.
-Refinement and coarsening are then the same operation, and the old mesh only serves to carry
-the field (one size per element) and the solution for :mod:`ngfrac.mesh.transfer`.
+domain from a mesh-size field: the field is sampled at points, each point restricts Netgen's
+local mesh size (``MeshingParameters.RestrictH``), and Netgen meshes from scratch. Refinement
+and coarsening are then the same operation, and the old mesh only serves to carry the field
+(one size per element) and the solution for :mod:`ngfrac.mesh.transfer`.
 
 Pipeline (the caller makes h_T, :func:`adapt_mesh` does the rest)::
 
-    eta_T --size_field_from_indicator--> h_T --enforce_crack_sizes--> h_T <= h_tip, h_crack
+    eta_T --size_field_from_indicator--> h_T (the caller lowers it on the crack)
         --grade_sizes--> |grad h| <= 0.3 --cap_vertices--> predicted nv <= 0.95 cap
-        --sample_size_field--> (points, h, weights) --remesh--> new mesh, nv <= cap (checked)
+        --sample_size_field--> (points, h, weights) --Netgen--> new mesh, nv <= cap (checked)
 
-Measured with ngsolve/netgen 6.2.2608 on a shared 2-core machine (``pytest --runslow -s -k
-benchmark tests/ngfrac/test_meshing.py`` prints the numbers again):
-
-* Time: Netgen's meshing dominates (``RestrictH`` is ~0.3-3 us per point): a crack mesh of
-  ~5,000 vertices takes ~0.5 s (3,300: 0.3 s; 6,600: 0.7 s; 11,800: 0.85 s), with
-  ``optsteps2d=1``, which halves the default's time at nearly equal quality (smallest angle
-  29.7 deg, 5th percentile 43.5 deg, against 29.6 and 44.0 deg). Uniform meshes for reference:
-  11,800 vertices 1.1 s, 46,600 vertices 6.3 s (default optimisation).
-* Netgen realises a *graded* size field ~1.2-1.45x coarser than requested (longest edge over
-  requested h, median), although a uniform ``maxh`` is met exactly (median 1.00) and
-  ``GetLocalH`` reports the requested values. Sizes below hmax therefore go to Netgen divided
-  by :data:`SIZE_RATIO` = 1.3; then the median ratio is ~0.95 on a constant band and ~1.2 on
-  the graded flanks, 95th percentile < 1.6.
-* Near the finest, graded sizes Netgen also leaves a few elements *below* the local h asked
-  (smallest longest edge 0.81-0.86 hmin); :class:`SizeFloor` learns that shortfall per run and
-  :func:`adapt_mesh` remeshes until no element is below ``hmin``.
-* Sampling: a point per element, or a lattice with spacing ~h where the carrying element is
-  coarser than the requested h; sampling 2x denser changes the vertex count by < 3 %.
-* Vertex count: ``nv ~ c * int h^-2 dx`` over the *graded* requested field, c =
-  :data:`VERTEX_DENSITY` = 1.45; measured 1.20 (smooth fields) to 1.58 (a small fine disc),
-  1.32-1.36 for capped fields (2/sqrt(3) = 1.155 would be equilateral triangles of size h).
-  :func:`remesh` re-measures c whenever a mesh exceeds the cap and regenerates, so the cap
-  holds whatever the constant; with c = 1.45 one attempt is the rule.
-
-Alternative measured: rebuild from the base mesh (uniform hmax) by repeated marked bisection
-(``SetRefinementFlags`` + ``Refine`` until every longest edge <= 1.5 h) for the field
-``h = clip(hmin + 0.3 d, hmin, 0.1)`` around a crack on the unit square, hmin = 0.005 /
-0.0025 / 0.00125: bisection 0.03 / 0.04 / 0.09 s against 0.08 / 0.14 / 0.33 s, but 2.4-2.7x
-the vertices (2,338 / 4,595 / 9,044 against 956 / 1,810 / 3,410), sizes overshooting the
-request (median L/h 0.8) and worse shapes (5th percentile of the smallest angle 31 deg against
-41 deg). Under a vertex cap regeneration resolves the crack ~1.6x finer and needs no hierarchy
-bookkeeping, so it is the choice; a remesh every few steps costs about one or two time steps.
-
-Dimension: everything but :func:`sample_size_field`'s lattice and the Netgen geometry is
-written for d = 2 or 3 (``h^-d``, facets of d vertices); 3D needs an OCC geometry and a
-calibrated ``VERTEX_DENSITY``.
+One path serves both dimensions; what differs is in :class:`MeshingConstants`
+(:data:`MESHING_2D`, :data:`MESHING_3D`, chosen by :func:`meshing_constants`): Netgen's
+vertex density ``nv ~ c * int h^-d dx``, the ratio by which Netgen meshes graded fields
+coarser than asked, its optimisation steps, and whether hmin is a checked floor of the
+delivered mesh. Why regeneration and not bisection, and the measurements behind every
+constant: docs/adaptivity.md ("Meshing constants").
 """
 from __future__ import annotations
 
@@ -66,8 +36,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .domains import MeshingError, netgen_geometry
-from ..solve.nodal import LagrangeNodes
+from .domains import Domain, MeshingError, domain_of
 from ..scene import Geometry
 
 log = logging.getLogger(__name__)
@@ -76,37 +45,103 @@ VERTEX_DENSITY = 1.45
 """c in ``nv ~ c * int h(x)^-2 dx`` for 2D Netgen meshes (h = graded requested size)."""
 
 SIZE_RATIO = 1.3
-"""Netgen meshes graded fields this much coarser than asked; sizes are divided by it."""
+"""Netgen meshes graded 2D fields this much coarser than asked; sizes are divided by it."""
 
 DENSITY = 1.0
 """Sample points per requested h along an edge (see :func:`sample_size_field`)."""
 
 LEARNED_MARGIN = 0.93
-"""Share of the cap a remesh aims at once :class:`VertexDensity` has measured its constant."""
+"""Share of the cap a 2D remesh aims at once :class:`VertexDensity` has measured its constant."""
+
+FIRST_MARGIN = 0.95
+"""Share of the cap a remesh aims at before the constant is measured."""
+
+NETGEN_GRADING = 0.3
+"""Netgen's default grading: its local h grows at most like ``h + 0.3 * distance``."""
+
+
+@dataclass(frozen=True)
+class MeshingConstants:
+    """What the remesh path needs to know of Netgen in one dimension.
+
+    Attributes
+    ----------
+    dim : int
+    vertex_density : float
+        c in ``nv ~ c * int h^-d dx`` over the graded requested field, until a run has
+        measured its own (:class:`VertexDensity`).
+    size_ratio : float
+        Sizes below hmax go to Netgen divided by it (Netgen realises graded fields coarser
+        than asked; a uniform ``maxh`` is met).
+    optimize_steps : int
+        Netgen's ``optsteps2d`` / ``optsteps3d``.
+    learned_margin : float
+        Share of the cap aimed at once the vertex density is measured.
+    floor_factor : float
+        Requested sizes are raised to ``floor_factor * hmin`` (2D: to ``floor_factor`` times
+        :meth:`SizeFloor.floor`); 2D: the size ratio, so Netgen is asked for hmin.
+    hmin_checked : bool
+        Whether no element of the delivered mesh may be below hmin (2D: the mesh is made
+        again with a lowered :class:`SizeFloor`); in 3D hmin only floors the request.
+    recap_graded : bool
+        What a mesh over the cap is followed by: a new cap of the graded element field (3D,
+        where Netgen's grading halo holds most of a fine band's vertices), or a cap of the
+        sampled field as it is (2D).
+    """
+
+    dim: int
+    vertex_density: float
+    size_ratio: float
+    optimize_steps: int
+    learned_margin: float
+    floor_factor: float
+    hmin_checked: bool
+    recap_graded: bool
+
+
+MESHING_2D = MeshingConstants(dim=2, vertex_density=VERTEX_DENSITY, size_ratio=SIZE_RATIO,
+                              optimize_steps=1, learned_margin=LEARNED_MARGIN,
+                              floor_factor=SIZE_RATIO, hmin_checked=True, recap_graded=False)
+"""Triangles (Netgen 6.2.2608)."""
+
+MESHING_3D = MeshingConstants(dim=3, vertex_density=4.3, size_ratio=1.15, optimize_steps=1,
+                              learned_margin=FIRST_MARGIN, floor_factor=SIZE_RATIO,
+                              hmin_checked=False, recap_graded=True)
+"""Tetrahedra (Netgen 6.2.2608). ``floor_factor`` is the 2D size ratio, so Netgen is asked
+for nothing below 1.3 / 1.15 hmin."""
+
+
+def meshing_constants(dim: int) -> MeshingConstants:
+    """:data:`MESHING_2D` or :data:`MESHING_3D`."""
+    if dim == 2:
+        return MESHING_2D
+    if dim == 3:
+        return MESHING_3D
+    raise ValueError(f"no meshing constants for dimension {dim}")
 
 
 @dataclass
 class VertexDensity:
     """The constant c of ``nv ~ c * int h^-d dx``, learned from the meshes made so far.
 
-    Netgen's c depends on the field (1.2 for smooth fields, up to 1.6 for a small fine disc),
-    so a fixed c mispredicts a crack mesh by up to 40 %: in the adaptive Fig. 2 demo 49 of 50
-    remeshes with c = 1.45 overshot the cap and were made twice. Successive meshes of one run
-    have similar fields, so the c measured on the last mesh predicts the next one to about
-    +-7 % (measured: ``python benchmarks/adaptivity_cost.py``); pass one instance to every
-    :func:`remesh` of a run.
+    Netgen's c depends on the field, so a fixed c mispredicts a crack mesh by up to 40 %;
+    successive meshes of one run have similar fields, so the c measured on the last mesh
+    predicts the next one to a few per cent (docs/adaptivity.md, "Meshing constants"). Pass
+    one instance to every :func:`adapt_mesh` of a run. Until ``measured``, the dimension's
+    :attr:`MeshingConstants.vertex_density` is used and ``value`` is ignored.
     """
 
     value: float = VERTEX_DENSITY
     measured: bool = False
 
+    def of(self, constants: MeshingConstants) -> float:
+        """The constant to predict with: the measured one, else the dimension's default."""
+        return self.value if self.measured else constants.vertex_density
+
     def update(self, vertices: int, integral: float) -> None:
         """Record the count of a mesh made for a field whose ``int h^-d dx`` is ``integral``."""
         if integral > 0:
             self.value, self.measured = vertices / integral, True
-
-NETGEN_GRADING = 0.3
-"""Netgen's default grading: its local h grows at most like ``h + 0.3 * distance``."""
 
 
 @dataclass
@@ -115,8 +150,7 @@ class SizeFloor:
     over the floor it was sent, learned from the meshes made so far.
 
     Netgen's advancing front leaves a few elements below the local h it was given near a
-    graded region: asked for nothing below hmin, crack meshes had smallest longest edges of
-    0.81-0.86 hmin (Fig. 2 demo: 1.62e-3 under hmin = 2e-3). :func:`adapt_mesh` sends
+    graded region (docs/adaptivity.md, "hmin, a floor"). :func:`adapt_mesh` sends
     ``hmin / ratio`` as the floor, and whenever a mesh still has an element below hmin it
     lowers ``ratio`` by the shortfall and makes the mesh again; successive meshes of a run
     have the same kind of field, so after the first shortfall one attempt is the rule. Pass
@@ -204,9 +238,12 @@ class SizeField:
     sizes: np.ndarray
     weights: np.ndarray
 
-    def predicted_vertices(self, density: float = VERTEX_DENSITY) -> float:
-        """``c * sum_p w_p / h_p^d``: the vertex count Netgen will roughly produce."""
-        return predict_vertices(self.sizes, self.weights, density=density, dim=self.points.shape[1])
+    def predicted_vertices(self, density: float | None = None) -> float:
+        """``c * sum_p w_p / h_p^d``: the vertex count Netgen will roughly produce (c: the
+        dimension's :attr:`MeshingConstants.vertex_density` unless given)."""
+        dim = self.points.shape[1]
+        c = meshing_constants(dim).vertex_density if density is None else density
+        return predict_vertices(self.sizes, self.weights, density=c, dim=dim)
 
 
 # -- the size field ---------------------------------------------------------------------------
@@ -261,51 +298,6 @@ def size_field_from_indicator(mesh: ngs.Mesh, eta: np.ndarray, *, target_h: floa
     return np.clip(sizes, hmin, hmax)
 
 
-def enforce_crack_sizes(mesh: ngs.Mesh, sizes: np.ndarray, *,
-                        tip: np.ndarray | tuple[float, ...] | None = None,
-                        h_tip: float | None = None, margin: float = 0.0,
-                        z: ngs.GridFunction | None = None, z_level: float = 0.1,
-                        h_crack: float | None = None) -> np.ndarray:
-    """Lower element sizes near the crack tip and on the crack.
-
-    ``h_T <= h_tip`` for every element within ``margin`` of ``tip`` (so the tip never runs into
-    a coarse mesh between two adaptations) and ``h_T <= h_crack`` where ``z >= z_level`` at a
-    Lagrange node of the element (z: a P1/P2 H1 GridFunction on ``mesh``).
-
-    Returns
-    -------
-    (ne,) array
-        A new array; ``sizes`` is not changed.
-    """
-    geom = ElementGeometry.of(mesh)
-    sizes = np.array(sizes, dtype=float, copy=True)
-    if sizes.shape != geom.measures.shape:
-        raise ValueError(f"sizes has shape {sizes.shape}; the mesh has {len(geom.measures)} elements")
-    if tip is not None and h_tip is not None:
-        tip = np.asarray(tip, dtype=float)[: geom.dim]
-        if np.all(np.isfinite(tip)):
-            # |c - tip| - r_T is a lower bound of the distance from the tip to T.
-            near = np.linalg.norm(geom.centroids - tip, axis=1) - geom.radii <= margin
-            sizes[near] = np.minimum(sizes[near], h_tip)
-    if z is not None and h_crack is not None:
-        cracked = element_maximum(mesh, z, geom) >= z_level
-        sizes[cracked] = np.minimum(sizes[cracked], h_crack)
-    return sizes
-
-
-def element_maximum(mesh: ngs.Mesh, gf: ngs.GridFunction,
-                    geom: ElementGeometry | None = None) -> np.ndarray:
-    """Largest Lagrange-node value of a P1/P2 field on each element."""
-    geom = geom or ElementGeometry.of(mesh)
-    nodes = LagrangeNodes(gf.space)
-    values = nodes.values(gf)
-    result = values[geom.vertices].max(axis=1)
-    if nodes.order == 2:
-        edge_ids = edge_numbers(nodes.edge_vertices, geom.vertices)
-        np.maximum(result, values[nodes.nv + edge_ids].max(axis=1), out=result)
-    return result
-
-
 def edge_numbers(edge_vertices: np.ndarray, element_vertices: np.ndarray) -> np.ndarray:
     """Edge numbers (rows of ``edge_vertices``) of each element's edges, vectorised."""
     nv = int(max(edge_vertices.max(), element_vertices.max())) + 1
@@ -336,7 +328,7 @@ def element_grader(geom: ElementGeometry, grading: float = NETGEN_GRADING
     One Dijkstra run on the element-adjacency graph from a virtual source joined to each
     element T by an edge of length h_T gives ``min_S (h_S + grading * path(S, T))``; paths
     along centroids are a little longer than straight lines, so this grades a little more
-    gently than Netgen. About 15 ms for 40,000 elements.
+    gently than Netgen.
     """
     ne = len(geom.measures)
     a, b = _adjacent_elements(geom.vertices)
@@ -377,10 +369,11 @@ def sample_size_field(mesh: ngs.Mesh, sizes: np.ndarray, *, density: float = DEN
     holds the point and grows it by 0.3 h per h elsewhere). Each point carries the element's
     measure divided by its number of points.
     """
-    return _sample(ElementGeometry.of(mesh), sizes, density)
+    return sample_elements(ElementGeometry.of(mesh), sizes, density)
 
 
-def _sample(geom: ElementGeometry, sizes: np.ndarray, density: float = DENSITY) -> SizeField:
+def sample_elements(geom: ElementGeometry, sizes: np.ndarray, density: float = DENSITY) -> SizeField:
+    """:func:`sample_size_field` on the element geometry of a mesh, read once."""
     sizes = np.asarray(sizes, dtype=float)
     if sizes.shape != geom.measures.shape:
         raise ValueError(f"sizes has shape {sizes.shape}; the mesh has {len(geom.measures)} elements")
@@ -493,23 +486,31 @@ def _bisect(fits: Callable[[float], bool], lo: float, hi: float, rtol: float = 1
     return hi
 
 
-def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, hmax: float,
-           max_vertices: int, weights: np.ndarray | None = None,
-           grading: float = NETGEN_GRADING, optimize_steps: int = 1,
+
+
+# -- Netgen runs under the vertex cap ----------------------------------------------------------
+Proposal = Callable[[float, float], "tuple[np.ndarray, np.ndarray, float]"]
+"""``(allowed vertices, vertex density) -> (points, sizes to send, int h^-d dx)``: the field
+of one remesh attempt, capped for the allowed count."""
+
+
+def remesh(geometry: Geometry | Domain | Any, points: np.ndarray, sizes: np.ndarray, *,
+           hmax: float, max_vertices: int, weights: np.ndarray | None = None,
+           grading: float = NETGEN_GRADING, optimize_steps: int | None = None,
            max_attempts: int = 8, density: VertexDensity | None = None) -> ngs.Mesh:
-    """Generate a new mesh of ``geometry`` that follows a sampled size field.
+    """Generate a new mesh of ``geometry`` that follows a size field sampled at points.
 
     Sizes are capped with :func:`cap_vertices` (predicted count <= 0.95 ``max_vertices``),
-    sent to Netgen divided by :data:`SIZE_RATIO`, and the mesh is generated. If it still has
-    more than ``max_vertices`` vertices, the constant of the prediction is re-measured on the
-    mesh just made, the margin tightened, and the mesh generated again: the returned mesh
-    never exceeds the cap.
+    sent to Netgen divided by the dimension's size ratio, and the mesh is generated. If it
+    still has more than ``max_vertices`` vertices, the constant of the prediction is
+    re-measured on the mesh just made, the margin tightened, and the mesh generated again:
+    the returned mesh never exceeds the cap.
 
     Parameters
     ----------
-    geometry : Geometry or netgen geometry
-        A scene geometry (boundaries bottom, right, top, left are kept) or any Netgen geometry
-        with ``GenerateMesh(mp=...)``.
+    geometry : Geometry, Domain or netgen geometry
+        A scene geometry or domain (meshed without cracks) or any Netgen geometry with
+        ``GenerateMesh(mp=...)``.
     points : (n, d) array
         Where the sizes apply.
     sizes : (n,) array
@@ -523,13 +524,13 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
         the points on a grid over their bounding box.
     grading : float
         Netgen's grading.
-    optimize_steps : int
-        Netgen's ``optsteps2d``; 1 halves the time of the default 3 at nearly equal quality.
+    optimize_steps : int, optional
+        Netgen's ``optsteps2d`` (``optsteps3d``); default :attr:`MeshingConstants.optimize_steps`.
     max_attempts : int
         Generations before giving up with a :class:`~ngfrac.mesh.domains.MeshingError`.
     density : VertexDensity, optional
         The run's learned vertex-count constant: used for the prediction and updated with the
-        mesh made. Without it every call starts from :data:`VERTEX_DENSITY`.
+        mesh made. Without it every call starts from the dimension's default.
 
     Returns
     -------
@@ -542,22 +543,44 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
     if hmax <= 0 or np.any(sizes <= 0):
         raise ValueError("hmax and all sizes must be > 0")
     dim = points.shape[1]
-    ngeo = netgen_geometry(geometry) if isinstance(geometry, Geometry) else geometry
     if weights is None:
         weights = voronoi_weights(points)
-    learned = density if density is not None else VertexDensity()
-    margin = LEARNED_MARGIN if learned.measured else 0.95
+
+    def propose(allowed: float, c: float) -> tuple[np.ndarray, np.ndarray, float]:
+        current = cap_vertices(sizes, weights, allowed, hmax=hmax, density=c, dim=dim)
+        return points, current, predict_vertices(current, weights, density=1.0, dim=dim)
+
+    return _generate_under_cap(
+        _netgen_geometry(geometry), propose, hmax=hmax, max_vertices=max_vertices,
+        density=density if density is not None else VertexDensity(),
+        constants=meshing_constants(dim), grading=grading, optimize_steps=optimize_steps,
+        max_attempts=max_attempts)
+
+
+def _netgen_geometry(geometry: Geometry | Domain | Any) -> Any:
+    """A Netgen geometry: that of a scene geometry or domain (no cracks), else ``geometry``."""
+    if isinstance(geometry, (Geometry, Domain)):
+        return domain_of(geometry).netgen_geometry()
+    return geometry
+
+
+def _generate_under_cap(ngeo: Any, propose: Proposal, *, hmax: float, max_vertices: int,
+                        density: VertexDensity, constants: MeshingConstants, grading: float,
+                        optimize_steps: int | None, max_attempts: int) -> ngs.Mesh:
+    """Netgen runs on the proposed fields until a mesh has at most ``max_vertices`` vertices;
+    each mesh updates ``density``, each failure lowers the share of the cap aimed at."""
+    margin = constants.learned_margin if density.measured else FIRST_MARGIN
+    nv = 0
     for attempt in range(1, max_attempts + 1):
-        current = cap_vertices(sizes, weights, margin * max_vertices, hmax=hmax,
-                               density=learned.value, dim=dim)
+        c = density.of(constants)
+        points, sent, integral = propose(margin * max_vertices, c)
         started = time.perf_counter()
-        ngmesh = _generate(ngeo, points, current, maxh=max(hmax, float(current.max())),
-                           grading=grading, optimize_steps=optimize_steps)
+        ngmesh = generate(ngeo, points, sent, maxh=max(hmax, float(sent.max())), grading=grading,
+                          constants=constants, optimize_steps=optimize_steps)
         nv = len(ngmesh.Points())
-        integral = predict_vertices(current, weights, density=1.0, dim=dim)
         log.info("remesh attempt %d: %d vertices (cap %d, predicted %.0f) in %.2f s", attempt, nv,
-                 max_vertices, learned.value * integral, time.perf_counter() - started)
-        learned.update(nv, integral)
+                 max_vertices, c * integral, time.perf_counter() - started)
+        density.update(nv, integral)
         if nv <= max_vertices:
             return ngs.Mesh(ngmesh)
         margin *= 0.95
@@ -565,13 +588,33 @@ def remesh(geometry: Geometry | Any, points: np.ndarray, sizes: np.ndarray, *, h
                        f"attempts (last had {nv}); raise max_vertices or hmax")
 
 
-def _generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
-              grading: float, optimize_steps: int) -> ngm.Mesh:
-    mp = ngm.MeshingParameters(maxh=maxh, grading=grading, optsteps2d=optimize_steps)
-    active = sizes < maxh  # Netgen meets maxh itself, without the SIZE_RATIO correction
+def generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
+             grading: float = NETGEN_GRADING, constants: MeshingConstants | None = None,
+             optimize_steps: int | None = None) -> ngm.Mesh:
+    """One Netgen run: ``RestrictH(point, size / size_ratio)`` for every size below ``maxh``.
+
+    Parameters
+    ----------
+    ngeo : netgen geometry
+        ``SplineGeometry`` (2D) or ``OCCGeometry`` (3D), from :meth:`Domain.netgen_geometry`.
+    points : (n, d) array
+    sizes : (n,) array
+    maxh : float
+        Netgen's ``maxh``; it meets it itself, so sizes at or above it are not sent.
+    grading : float
+    constants : MeshingConstants, optional
+        Default: those of the points' dimension.
+    optimize_steps : int, optional
+        Default: ``constants.optimize_steps``.
+    """
+    constants = constants or meshing_constants(points.shape[1])
+    steps = constants.optimize_steps if optimize_steps is None else optimize_steps
+    mp = ngm.MeshingParameters(maxh=maxh, grading=grading,
+                               **{f"optsteps{constants.dim}d": steps})
+    active = sizes < maxh  # Netgen meets maxh itself, without the size-ratio correction
     xyz = np.zeros((int(active.sum()), 3))
     xyz[:, : points.shape[1]] = points[active]
-    for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / SIZE_RATIO).tolist()):
+    for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / constants.size_ratio).tolist()):
         mp.RestrictH(x, y, z, h)
     try:
         return ngeo.GenerateMesh(mp=mp)
@@ -594,48 +637,79 @@ def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray
     return np.bincount(owner, minlength=len(points)) * cell
 
 
-def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Any, sizes: np.ndarray, *, hmax: float,
-               max_vertices: int, grading: float = NETGEN_GRADING,
-               density: VertexDensity | None = None, hmin: float | None = None,
-               floor: SizeFloor | None = None, max_attempts: int = 4) -> ngs.Mesh:
-    """Grade, cap, sample and remesh: the new mesh for element sizes given on ``mesh``.
+# -- the adaptive path ---------------------------------------------------------------------------
+def _element_proposal(geom: ElementGeometry, grade: Callable[[np.ndarray], np.ndarray],
+                      requested: np.ndarray, hmax: float, constants: MeshingConstants) -> Proposal:
+    """The fields of the remesh attempts for element sizes: the graded element field capped
+    and sampled; after a mesh over the cap either that again with a tighter cap
+    (``constants.recap_graded``) or the sampled field capped as it is."""
+    field: SizeField | None = None
 
-    The cap is applied here on the elements, with grading inside the prediction (a steep
-    field costs Netgen's grading halo), so :func:`remesh` rarely needs a second attempt.
+    def propose(allowed: float, c: float) -> tuple[np.ndarray, np.ndarray, float]:
+        nonlocal field
+        if field is None or constants.recap_graded:
+            capped = cap_vertices(requested, geom.measures, allowed, hmax=hmax, density=c,
+                                  dim=geom.dim, grade=grade)
+            field = sample_elements(geom, capped)
+            if constants.recap_graded:
+                return field.points, field.sizes, predict_vertices(capped, geom.measures,
+                                                                   density=1.0, dim=geom.dim)
+        sent = cap_vertices(field.sizes, field.weights, allowed, hmax=hmax, density=c, dim=geom.dim)
+        return field.points, sent, predict_vertices(sent, field.weights, density=1.0, dim=geom.dim)
+
+    return propose
+
+
+def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndarray, *,
+               hmax: float, max_vertices: int, grading: float = NETGEN_GRADING,
+               density: VertexDensity | None = None, hmin: float | None = None,
+               floor: SizeFloor | None = None, max_attempts: int = 4,
+               cap_attempts: int = 8) -> ngs.Mesh:
+    """Grade, cap, sample and remesh: the new mesh (2D or 3D) for element sizes on ``mesh``.
+
+    The cap is applied on the elements, with grading inside the prediction (a steep field
+    costs Netgen's grading halo), so one Netgen run is the rule; the constants of the mesh's
+    dimension (:func:`meshing_constants`) say what else differs.
 
     Parameters
     ----------
     mesh : ngsolve.Mesh
         The current mesh, on which ``sizes`` lives (one per element).
-    geometry : Geometry or netgen geometry
-        The domain of the new mesh.
+    geometry : Geometry, Domain or netgen geometry
+        The domain of the new mesh (with its cracks: :meth:`Domain.netgen_geometry`).
     sizes : (ne,) array
-        Requested sizes, e.g. from :func:`size_field_from_indicator` and
-        :func:`enforce_crack_sizes`.
+        Requested sizes, e.g. from :func:`size_field_from_indicator`.
     hmax, max_vertices, grading, density
         As in :func:`remesh`.
     hmin : float, optional
-        Floor of the delivered mesh: no element's longest edge is below it. The sizes sent
-        are raised to ``floor.floor(hmin)`` and the mesh is made again (up to
+        Sizes are raised to ``floor_factor * hmin`` before they go to Netgen. Where
+        ``hmin_checked`` (2D) it is a floor of the delivered mesh: no element's longest edge is
+        below it; the floor sent is :meth:`SizeFloor.floor` and the mesh is made again (up to
         ``max_attempts`` times, then a warning) while it has a smaller element.
     floor : SizeFloor, optional
-        The run's learned ratio (see :class:`SizeFloor`); updated with every mesh.
+        The run's learned ratio (see :class:`SizeFloor`); updated with every checked mesh.
+    cap_attempts : int
+        Netgen runs per mesh before giving up on the vertex cap (:class:`MeshingError`).
     """
     geom = ElementGeometry.of(mesh)
+    constants = meshing_constants(geom.dim)
     grade = element_grader(geom, grading)
     learned = density if density is not None else VertexDensity()
     floor = floor if floor is not None else SizeFloor()
-    requested = np.minimum(sizes, hmax)
-    for _ in range(max_attempts):
-        # the sizes go to Netgen divided by SIZE_RATIO: floor them before that division
-        floored = requested if hmin is None else np.maximum(requested, SIZE_RATIO * floor.floor(hmin))
-        margin = LEARNED_MARGIN if learned.measured else 0.95
-        capped = cap_vertices(floored, geom.measures, margin * max_vertices, hmax=hmax,
-                              density=learned.value, dim=geom.dim, grade=grade)
-        field = _sample(geom, capped)
-        new = remesh(geometry, field.points, field.sizes, weights=field.weights, hmax=hmax,
-                     max_vertices=max_vertices, grading=grading, density=learned)
-        if hmin is None:
+    ngeo = _netgen_geometry(geometry)
+    checked = hmin is not None and constants.hmin_checked
+    requested = np.minimum(np.asarray(sizes, dtype=float), hmax)
+    for _ in range(max_attempts if checked else 1):
+        # the sizes go to Netgen divided by the size ratio: floor them before that division
+        floored = requested
+        if hmin is not None:
+            lowest = floor.floor(hmin) if checked else hmin
+            floored = np.maximum(requested, constants.floor_factor * lowest)
+        propose = _element_proposal(geom, grade, floored, hmax, constants)
+        new = _generate_under_cap(ngeo, propose, hmax=hmax, max_vertices=max_vertices,
+                                  density=learned, constants=constants, grading=grading,
+                                  optimize_steps=None, max_attempts=cap_attempts)
+        if not checked:
             return new
         smallest = float(ElementGeometry.of(new).diameters.min())
         if not floor.update(smallest, hmin):

@@ -90,8 +90,19 @@ def initial_tip(crack: Sequence[Sequence[float]],
 
     2D: the last point of the polyline (written from the mouth to the tip). 3D: the middle
     of the crack front, i.e. the mean of the midpoints of the polygon's edges that do not lie
-    on the domain boundary (``on_boundary`` tells, at an edge's midpoint), weighted by length;
-    all edges if none is on the boundary (an interior crack: its centre).
+    on the domain boundary, weighted by length; all edges if none is on the boundary (an
+    interior crack: its centre).
+
+    Parameters
+    ----------
+    crack : polyline (2D) or planar polygon (3D)
+    on_boundary : callable, optional
+        Whether a point lies on the domain boundary, e.g.
+        :meth:`ngfrac.mesh.domains.Domain.on_boundary`; asked at each edge's midpoint (3D).
+
+    Returns
+    -------
+    (d,) array
     """
     corners = np.asarray(crack, dtype=float)
     if corners.shape[1] == 2:

@@ -11,11 +11,13 @@ they know nothing of the scene classes that call them.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import TYPE_CHECKING, Iterator, Mapping, Sequence
 
 import numpy as np
 
 if TYPE_CHECKING:
+    from ..mesh.domains import Domain
     from .expressions import Expression
     from .sections import Geometry, Scene
 
@@ -28,6 +30,13 @@ SAME_POINT = 1e-9
 BAND_LEVEL = 0.1
 CORE_LEVEL = 0.9
 """z levels of the crack band and core (as :mod:`ngfrac.mesh.adapter` refines them)."""
+
+
+def _domain(geometry: "Geometry") -> "Domain":
+    """The domain of a geometry section (imported here: :mod:`ngfrac.mesh` imports the scene)."""
+    from ..mesh.domains import domain_of
+
+    return domain_of(geometry)
 
 
 class ResolutionWarning(UserWarning):
@@ -234,11 +243,9 @@ def crack_problems(geometry: "Geometry", cracks: Sequence[Sequence[Sequence[floa
     normals : list of (3,) arrays
         3D: the unit normal of each polygon.
     """
-    tol = SAME_POINT * math.hypot(*geometry.extent)
-    sides = {}
-    for axis, (o, e) in enumerate(zip(geometry.origin, geometry.extent)):
-        low, high = geometry.face_names[axis]
-        sides[low], sides[high] = (axis, o), (axis, o + e)
+    domain = _domain(geometry)
+    tol = SAME_POINT * domain.diameter
+    sides = domain.sides()
     for i, crack in enumerate(cracks):
         problem = (polyline_problem(crack, tol) if geometry.dim == 2
                    else polygon_problem(crack, normals[i], tol))
@@ -301,21 +308,22 @@ def nonfinite_value(expression: "Expression", coordinates: Sequence[np.ndarray],
 def crack_measure(scene: "Scene", radius: float) -> float:
     """Measure of the points within ``radius`` of the initial cracks (Steiner's formula,
     without the caps of crack ends on the boundary; overlaps counted twice)."""
-    geometry = scene.geometry
+    geometry = _domain(scene.geometry)
+    on_boundary = partial(geometry.on_boundary, tol=SAME_POINT * geometry.diameter)
     total = 0.0
     for crack in scene.cracks:
         p = np.asarray(crack.points, dtype=float)
         if geometry.dim == 2:
             length = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
-            free_ends = sum(not geometry.on_boundary(q) for q in (p[0], p[-1]))
+            free_ends = sum(not on_boundary(q) for q in (p[0], p[-1]))
             total += 2 * radius * length + free_ends * math.pi * radius ** 2 / 2
         else:
             area = 0.5 * float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)))
             edges = zip(p, np.roll(p, -1, axis=0))
             inner = sum(float(np.linalg.norm(b - a)) for a, b in edges
-                        if not geometry.on_boundary(0.5 * (a + b)))
+                        if not on_boundary(0.5 * (a + b)))
             total += 2 * radius * area + math.pi / 2 * inner * radius ** 2
-    return min(total, float(np.prod(geometry.extent)))
+    return min(total, geometry.measure)
 
 
 def estimated_vertices(scene: "Scene") -> float:
@@ -323,23 +331,21 @@ def estimated_vertices(scene: "Scene") -> float:
 
     ``c * sum(measure / h^d)`` over the core (z0 >= 0.9) at h_crack, the band (z0 >= 0.1)
     at h_band, the tip disc (ball) outside the band at h_tip and the rest at hmax, with
-    Netgen's vertex density c (:data:`ngfrac.mesh.remesh.VERTEX_DENSITY`,
-    :data:`ngfrac.mesh.remesh3d.VERTEX_DENSITY_3D`). Grading halos and the tip lane are left
-    out, so a real mesh has more.
+    Netgen's vertex density c (:attr:`ngfrac.mesh.remesh.MeshingConstants.vertex_density`).
+    Grading halos and the tip lane are left out, so a real mesh has more.
     """
     from ..mesh.adapter import AdaptivitySizes
+    from ..mesh.remesh import meshing_constants
+    from ..physics.crack_models import crack_model
 
     sizes = AdaptivitySizes.of(scene)
-    dim = scene.geometry.dim
-    if dim == 2:
-        from ..mesh.remesh import VERTEX_DENSITY as density
-    else:
-        from ..mesh.remesh3d import VERTEX_DENSITY_3D as density
-    from ..physics.crack_models import crack_model
+    domain = _domain(scene.geometry)
+    dim = domain.dim
+    density = meshing_constants(dim).vertex_density
 
     eps = scene.phase_field.epsilon
     model = crack_model(scene.phase_field.model)  # where its optimal profile falls to a level
-    volume = float(np.prod(scene.geometry.extent))
+    volume = domain.measure
     core = crack_measure(scene, model.half_width(eps, CORE_LEVEL))
     band = max(crack_measure(scene, model.half_width(eps, BAND_LEVEL)) - core, 0.0)
     tip = _tip_measure(scene, sizes.tip_margin, model.half_width(eps, BAND_LEVEL)) if scene.cracks else 0.0
@@ -353,13 +359,12 @@ def _tip_measure(scene: "Scene", radius: float, band: float, n: int = 32) -> flo
     band, on an n^d grid over the disc's bounding box."""
     from ..physics.cracks import distance_to_cracks, initial_tip
 
-    geometry = scene.geometry
+    geometry = _domain(scene.geometry)
     polygons = [c.points for c in scene.cracks]
-    tip = initial_tip(polygons[0], geometry.on_boundary)
+    tip = initial_tip(polygons[0], partial(geometry.on_boundary, tol=SAME_POINT * geometry.diameter))
     axes = [tip[k] + radius * (np.arange(n) + 0.5) * 2 / n - radius for k in range(geometry.dim)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, geometry.dim)
-    low, high = np.asarray(geometry.origin), np.asarray(geometry.origin) + geometry.extent
-    keep = (np.linalg.norm(grid - tip, axis=1) <= radius) & np.all((grid >= low) & (grid <= high), axis=1)
+    keep = (np.linalg.norm(grid - tip, axis=1) <= radius) & geometry.contains(grid)
     keep[keep] = distance_to_cracks(grid[keep], polygons) > band
     return float(keep.sum()) * (2 * radius / n) ** geometry.dim
 
@@ -400,7 +405,7 @@ def resolution_warnings(scene: "Scene") -> list[str]:
                          f"h_crack = {sizes.h_crack:g}, h_band = {sizes.h_band:g} and h_tip = "
                          f"{sizes.h_tip:g} need along the initial cracks: the cap will coarsen the "
                          "crack band; raise max_vertices (or epsilon)")
-    smallest = scene.geometry.shortest_side
+    smallest = _domain(scene.geometry).shortest_side
     if eps > smallest / 10 * (1 + 1e-12):
         found.append(f"phase_field.epsilon = {eps:g} is above a tenth of the smallest extent of the "
                      f"domain ({smallest:g}): the crack band (about {4.6 * eps:.3g} wide) fills much "

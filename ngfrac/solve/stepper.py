@@ -22,7 +22,7 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import Adaptation, MeshAdapter
-from ..mesh.domains import build_mesh
+from ..mesh.domains import Domain, build_mesh, domain_of
 from ..physics.crack_models import crack_model
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.elastic import make_model
@@ -76,10 +76,12 @@ class PhaseFieldStepper:
         self.context = StepContext(ngs.Parameter(0.0), ngs.Parameter(1.0 / scene.time.dt),
                                    ThreadPolicy(scene.discretization.threaded_solves), PhaseTimer())
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
+        self.domain: Domain = domain_of(scene.geometry)
+        """The domain (:mod:`ngfrac.mesh.domains`)."""
         self.adapter = MeshAdapter(scene) if scene.adaptivity.enabled else None
         polylines = [crack.points for crack in scene.cracks]
         self.tracker = CrackTracker(
-            polylines, initial_tip(polylines[0], self._on_boundary) if polylines else None,
+            polylines, initial_tip(polylines[0], self.domain.on_boundary) if polylines else None,
             self.crack_model, scene.phase_field.epsilon,
             self.adapter.sizes.h_band if self.adapter else None)
         self.forces: dict[str, float] = {}
@@ -110,13 +112,6 @@ class PhaseFieldStepper:
     def scene(self, value: Scene) -> None:
         raise AttributeError("a stepper's scene cannot be changed: its forms, spaces and loads "
                              "were built from it; make a new PhaseFieldStepper(new_scene)")
-
-    def _on_boundary(self, point: np.ndarray) -> bool:
-        """Whether a point lies on the boundary of the scene's rectangle or box."""
-        g = self.scene.geometry
-        tol = 1e-10 * max(g.extent)
-        return any(abs(p - o) <= tol or abs(p - o - e) <= tol
-                   for p, o, e in zip(point, g.origin, g.extent))
 
     # -- the fields and sub-problems of one mesh ---------------------------------------------
     def _rebuild(self, mesh: ngs.Mesh) -> MeshFields:

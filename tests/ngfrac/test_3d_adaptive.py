@@ -6,8 +6,7 @@ import pytest
 
 from ngfrac.physics.cracks import distance_to_polygons
 from ngfrac.mesh.domains import build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry
-from ngfrac.mesh.remesh3d import adapt_mesh_3d
+from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh
 from ngfrac.scene import Scene
 from ngfrac.solve.stepper import PhaseFieldStepper
 
@@ -30,14 +29,14 @@ def small_box(**adaptivity):
     })
 
 
-def test_adapt_mesh_3d_meets_the_cap_and_refines_at_the_crack():
+def test_adapt_mesh_in_3d_meets_the_cap_and_refines_at_the_crack():
     scene = small_box()
     mesh = build_mesh(scene.geometry, 0.08, [CRACK])
     geom = ElementGeometry.of(mesh)
     # asks for ~100,000 vertices: h = 0.005 at the crack, growing by 0.3 per unit distance
     sizes = np.clip(0.005 + 0.3 * distance_to_polygons(geom.centroids, [CRACK]), 0.005, 0.08)
-    new = adapt_mesh_3d(mesh, netgen_geometry(scene.geometry, [CRACK]), sizes, hmax=0.08,
-                        max_vertices=800)
+    new = adapt_mesh(mesh, netgen_geometry(scene.geometry, [CRACK]), sizes, hmax=0.08,
+                     max_vertices=800)
     assert 400 < new.nv <= 800, new.nv  # the cap holds and is used
     fine = ElementGeometry.of(new)
     distance = distance_to_polygons(fine.centroids, [CRACK])

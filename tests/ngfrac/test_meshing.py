@@ -9,7 +9,7 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.mesh import remesh as meshing
-from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.physics.cracks import distance_to_polylines
 from ngfrac.mesh.domains import build_mesh, netgen_geometry
 from ngfrac.mesh.remesh import (
     ElementGeometry,
@@ -17,14 +17,12 @@ from ngfrac.mesh.remesh import (
     VertexDensity,
     adapt_mesh,
     cap_vertices,
-    enforce_crack_sizes,
     grade_sizes,
     predict_vertices,
     remesh,
     sample_size_field,
     size_field_from_indicator,
 )
-from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 
 SQUARE = Geometry(width=1.0, height=1.0)
@@ -131,7 +129,7 @@ def test_vertex_cap_is_never_exceeded_and_keeps_the_tip_finest():
 def test_cap_holds_when_the_prediction_is_badly_calibrated():
     field = sample_size_field(build_mesh(SQUARE, 0.05), np.full(
         len(ElementGeometry.of(build_mesh(SQUARE, 0.05)).measures), 0.01))
-    density = VertexDensity(0.3)  # predicts ~5x too few vertices
+    density = VertexDensity(0.3, measured=True)  # predicts ~5x too few vertices
     new = remesh(SQUARE, field.points, field.sizes, weights=field.weights, hmax=HMAX,
                  max_vertices=800, density=density)
     assert new.nv <= 800
@@ -213,28 +211,6 @@ def test_size_field_from_indicator_equidistributes():
                                             hmax=0.05) == 0.05)
     with pytest.raises(ValueError, match="elements"):
         size_field_from_indicator(mesh, eta[:-1], target_h=0.01, hmin=0.01, hmax=0.05)
-
-
-def test_enforce_crack_sizes_near_tip_and_on_crack():
-    mesh = build_mesh(SQUARE, 0.05)
-    geom = ElementGeometry.of(mesh)
-    sizes = np.full(len(geom.measures), HMAX)
-    tip = (0.5, 0.5)
-    out = enforce_crack_sizes(mesh, sizes, tip=tip, h_tip=0.002, margin=0.1)
-    near = np.linalg.norm(geom.centroids - tip, axis=1) < 0.1
-    assert np.all(out[near] == 0.002) and np.all(out[np.linalg.norm(
-        geom.centroids - tip, axis=1) > 0.1 + geom.diameters] == HMAX)
-    assert np.all(sizes == HMAX), "the input is not changed"
-
-    fes = ngs.H1(mesh, order=2)
-    z = ngs.GridFunction(fes)
-    nodes = LagrangeNodes(fes)
-    line = [[(0.0, 0.5), (0.5, 0.5)]]
-    nodes.assign(z, optimal_profile(distance_to_polylines(nodes.points, line), 0.02))
-    out = enforce_crack_sizes(mesh, sizes, z=z, z_level=0.5, h_crack=0.005)
-    distance = distance_to_polylines(geom.centroids, line)
-    assert np.all(out[distance < 0.005] == 0.005)
-    assert np.all(out[distance > 0.02 * np.log(2) + geom.diameters] == HMAX)
 
 
 def test_grade_sizes_is_lipschitz():

@@ -10,7 +10,7 @@ import pytest
 
 from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
 from ngfrac.mesh.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, enforce_crack_sizes
+from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, edge_numbers
 from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 from ngfrac.mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
@@ -37,6 +37,15 @@ def profile_field(mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
     return z
 
 
+def element_maximum(z: ngs.GridFunction) -> np.ndarray:
+    """Largest Lagrange-node value of z on each element."""
+    nodes = LagrangeNodes(z.space)
+    index = ElementGeometry.of(z.space.mesh).vertices
+    if nodes.order == 2:
+        index = np.hstack([index, nodes.nv + edge_numbers(nodes.edge_vertices, index)])
+    return nodes.values(z)[index].max(axis=1)
+
+
 def crack_mesh(start: ngs.Mesh, *, h_band: float, h_core: float, hmax: float, width: float,
                order: int = 2) -> ngs.Mesh:
     """h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
@@ -44,8 +53,9 @@ def crack_mesh(start: ngs.Mesh, *, h_band: float, h_core: float, hmax: float, wi
     for _ in range(2):
         geom = ElementGeometry.of(mesh)
         band = distance_to_polylines(geom.centroids, CRACK) < width
-        sizes = enforce_crack_sizes(mesh, np.where(band, h_band, hmax),
-                                    z=profile_field(mesh, order), z_level=0.6, h_crack=h_core)
+        sizes = np.where(band, h_band, hmax)
+        cracked = element_maximum(profile_field(mesh, order)) >= 0.6
+        sizes = np.where(cracked, np.minimum(sizes, h_core), sizes)
         mesh = adapt_mesh(mesh, SQUARE, sizes, hmax=hmax, max_vertices=10**6)
     return mesh
 
