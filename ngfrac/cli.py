@@ -17,7 +17,7 @@ from .io.checkpoint import CheckpointError
 from .scene.checks import ResolutionWarning, resolution_warnings
 from .mesh.domains import MeshingError
 from .io.output import OutputError
-from .io.results import ResultsError
+from .io.hdf5 import ResultsError
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
 
@@ -115,8 +115,7 @@ def _warn_resolution(scene: Scene, strict: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
+    from .io.writers import Progress
     from .runner import run_scene
 
     if bool(args.scene) == bool(args.restart):
@@ -132,25 +131,11 @@ def _run(args: argparse.Namespace) -> int:
         scene = load_scene(args.scene, args.overrides)
         out = Path(args.out)
     _warn_resolution(scene, args.strict)
-    dt = scene.time.dt
-    bar = tqdm(total=scene.time.n_ticks, unit="dt", disable=args.no_progress,
-               desc=scene.name, dynamic_ncols=True)
-    state = {"tip_x": float("nan")}
-
-    def progress(record) -> None:
-        if record.has_diagnostics:
-            state["tip_x"] = record.tip_x
-        bar.set_postfix(t=f"{record.t:.4g}", nv=record.nv, tip_x=f"{state['tip_x']:.3f}", refresh=False)
-        bar.update(round(record.t / dt) - bar.n)
-
-    try:
-        with warnings.catch_warnings():  # printed above, once
-            warnings.simplefilter("ignore", ResolutionWarning)
-            summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
-                                plots=not args.no_plots, restart=bool(args.restart),
-                                on_start=lambda stepper: bar.update(stepper.ticks))
-    finally:
-        bar.close()
+    with warnings.catch_warnings():  # printed above, once
+        warnings.simplefilter("ignore", ResolutionWarning)
+        summary = run_scene(scene, out, overwrite=args.overwrite, plots=not args.no_plots,
+                            restart=bool(args.restart),
+                            writers=[Progress(scene, disable=args.no_progress)])
     last = summary.last
     print(f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
           f"crack length {last.crack_length:.4f}, tip ({last.tip_x:.3f}, {last.tip_y:.3f}); "
