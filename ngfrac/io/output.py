@@ -408,7 +408,7 @@ def git_revision() -> tuple[str | None, bool | None]:
 
     ``(None, None)`` when ngfrac is not run from a git checkout of itself or git is missing.
     """
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]  # ngfrac/io/output.py -> the checkout
     if not (root / "setup.cfg").exists():
         return None, None  # an installed copy, not a checkout
 
