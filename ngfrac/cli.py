@@ -4,6 +4,7 @@
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
 (:func:`ngfrac.scene.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
 them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
+``NGFRAC_THREADS`` caps the threads of a run (applied by :func:`ngfrac.runner.run_scene`).
 """
 from __future__ import annotations
 
@@ -30,7 +31,8 @@ class _Strict(Exception):
     """--strict and the scene has resolution warnings (already printed)."""
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``ngfrac`` argument parser: the subcommands and flags of the user guide's CLI table."""
     parser = argparse.ArgumentParser(prog="ngfrac", description="Phase-field crack propagation "
                                      "on adaptive NGSolve meshes.")
     parser.add_argument("--version", action="version", version=_version_line(),
@@ -147,7 +149,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``ngfrac`` command."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO if getattr(args, "verbose", False) else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from ngfrac.cli import _parser
+from ngfrac.cli import build_parser
 from ngfrac.scene.expressions import CONSTANTS, FUNCTIONS, VARIABLES
 from ngfrac.scene import LISTS, SECTIONS, SceneError
 
@@ -92,7 +92,7 @@ def parser_actions() -> dict[str, list[set[str]]]:
                 for action in parser._actions  # argparse has no public walk
                 if not isinstance(action, (argparse._HelpAction, argparse._SubParsersAction))]
 
-    top = _parser()
+    top = build_parser()
     out = {"ngfrac": arguments(top)}
     for action in top._actions:
         if isinstance(action, argparse._SubParsersAction):

@@ -40,8 +40,8 @@ from ..scene.checks import resolution_warnings
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPath", "HistoryCSV", "Plots", "Progress",
-           "Results", "RunFolder", "VTKSnapshots", "Writer", "Writers", "default_writers",
+__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "Plots", "Progress",
+           "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers", "default_writers",
            "run_info", "snapshot_due", "write_crack_path", "write_plots", "write_snapshot"]
 
 CHECKPOINT = "checkpoint.h5"
@@ -188,7 +188,7 @@ class HistoryCSV(Writer):
             self.writer.close()
 
 
-class Results(Writer):
+class ResultsH5(Writer):
     """``results.h5`` (and ``results.xdmf``): the history rows and, with the VTK snapshots,
     u and z on their meshes (:class:`~ngfrac.io.results.ResultsWriter`)."""
 
@@ -294,7 +294,7 @@ def write_crack_path(out: Path, stepper: "PhaseFieldStepper") -> Path:
     return path
 
 
-class CrackPath(Writer):
+class CrackPathCSV(Writer):
     """``crack_path.csv`` at the end, from ``history.csv`` (so after :class:`HistoryCSV`)."""
 
     def __init__(self, folder: RunFolder) -> None:
@@ -363,14 +363,16 @@ class Progress(Writer):
 def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list[Writer]:
     """The writers of ``ngfrac run``, in the order they are called.
 
-    :class:`VTKSnapshots`, :class:`HistoryCSV`, :class:`Results` (when ``output.results``),
-    :class:`Checkpoints`, :class:`CrackPath` and, with ``plots``, :class:`Plots`.
+    :class:`HistoryCSV`, :class:`ResultsH5` (when ``output.results``), :class:`VTKSnapshots`,
+    :class:`Checkpoints` (after the other writes of a step), :class:`CrackPathCSV` (after
+    history.csv is closed) and, with ``plots``, :class:`Plots`. ``vtk/`` is made here, so the
+    manifest lists it before the other files.
     """
-    vtk = VTKSnapshots(folder, scene)  # makes vtk/ first: the manifest lists it first
+    vtk = VTKSnapshots(folder, scene)
     writers: list[Writer] = [HistoryCSV(folder)]
     if scene.output.results:
-        writers.append(Results(folder, scene))
-    writers += [vtk, Checkpoints(folder, scene), CrackPath(folder)]
+        writers.append(ResultsH5(folder, scene))
+    writers += [vtk, Checkpoints(folder, scene), CrackPathCSV(folder)]
     if plots:
         writers.append(Plots(folder))
     return writers
