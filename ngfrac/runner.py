@@ -129,7 +129,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     Parameters
     ----------
     scene : Scene
-    out_dir : path of the run folder
+    out_dir : str or Path
+        The run folder.
     overwrite : replace an earlier run in that folder (only the files ngfrac writes)
     on_record : called with every step record
     plots : write history.png and crack.png at the end

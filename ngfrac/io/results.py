@@ -81,7 +81,8 @@ class ResultsWriter:
 
     Parameters
     ----------
-    path : path of the ``.h5`` file to create
+    path : str or Path
+        The ``.h5`` file to create.
     scene : the resolved scene, stored as TOML
     columns : history column names (by default those of the first record appended)
     overwrite : replace an existing file (otherwise an existing file is an error)

@@ -67,11 +67,16 @@ class RunFolder:
 
     Attributes
     ----------
-    path : the folder
-    manifest : the files ngfrac wrote there
-    info : the ``run.json`` data (stored as results.h5's root attributes)
-    restart : the run continues the folder's earlier run from its checkpoint
-    overwrite : the folder's earlier run was replaced
+    path : Path
+        The folder.
+    manifest : Manifest
+        The files ngfrac wrote there.
+    info : dict
+        The ``run.json`` data (also results.h5's root attributes).
+    restart : bool
+        The run continues the folder's earlier run from its checkpoint.
+    overwrite : bool
+        The folder's earlier run was replaced.
     """
 
     path: Path
