@@ -9,6 +9,9 @@ ridge of z) and the plots. ``restart=True`` continues a folder from its
 checkpoint: rows and snapshots written after the checkpoint are dropped, so the continued
 history equals an uninterrupted one; a changed scene (``time.t_end``, ``[output]``) replaces
 ``scene.toml`` and the restart is appended to ``run.json``.
+
+:func:`run_scene` is a loop over ``stepper.run()`` that hands each record to the writers of
+:mod:`ngfrac.io.writers` (:func:`~ngfrac.io.writers.default_writers` and any given).
 """
 from __future__ import annotations
 

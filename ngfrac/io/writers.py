@@ -6,7 +6,8 @@ script's own loop over ``stepper.run()``):
 - ``start(stepper, record)`` once, before the first step: opens its files; ``record`` is
   ``stepper.record()`` of the state the run starts from, which a new run writes and a restart
   (whose files already hold it) does not;
-- ``record(stepper, record)`` after every step, with the step's :class:`StepRecord`;
+- ``record(stepper, record)`` after every step, with the step's
+  :class:`~ngfrac.solve.stepper.StepRecord`;
 - ``finish(stepper)`` once, after the last step: closes its files, writes what needs the
   whole run (the crack path, the plots);
 - ``close()`` always, also after an error: releases what is still open (safe to call twice).
