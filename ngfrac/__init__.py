@@ -10,15 +10,13 @@ Typical use::
     for record in stepper.run():
         ...
 
-Threads: NGSolve uses all cores inside ``TaskManager``; its idle threads spin, so two runs
-side by side slow each other down badly. Set ``NGFRAC_THREADS=1`` (any positive integer) in
-the environment to cap the threads of each run before starting several at once.
+Importing ngfrac changes nothing in the session (threads, matplotlib). Threads: NGSolve uses
+all cores inside ``TaskManager`` and its idle threads spin, so two runs side by side slow each
+other down badly; ``NGFRAC_THREADS=1`` (any positive integer) in the environment caps the
+threads of each run, applied by :func:`run_scene` and ``ngfrac run`` when the run starts, or
+by :func:`set_threads` in a script that drives the stepper itself.
 """
-import logging as _logging
-import os as _os
-
-import ngsolve as _ngs
-
+from .environment import set_threads
 from .scene.checks import ResolutionWarning, resolution_warnings
 from .scene.expressions import Expression, ExpressionError
 from .mesh.domains import MeshingError
@@ -29,20 +27,7 @@ from .solve.stepper import PhaseFieldStepper, SolverError, StepRecord
 
 __all__ = ["Expression", "ExpressionError", "MeshingError", "PhaseFieldStepper", "ResolutionWarning",
            "RunSummary", "Scene", "SceneError", "SolverError", "StepRecord", "load_scene",
-           "resolution_warnings", "run_scene"]
+           "resolution_warnings", "run_scene", "set_threads"]
 __version__ = _ngfrac_version()
 """From the installed package metadata, i.e. setup.cfg's ``version`` (the one place it is set)."""
 
-
-def _threads_from_environment() -> None:
-    value = _os.environ.get("NGFRAC_THREADS", "").strip()
-    if not value:
-        return
-    if not value.isdigit() or int(value) < 1:
-        _logging.getLogger(__name__).warning(
-            "NGFRAC_THREADS = %r ignored: expected a positive integer, e.g. NGFRAC_THREADS=1", value)
-        return
-    _ngs.SetNumThreads(int(value))
-
-
-_threads_from_environment()

@@ -4,6 +4,7 @@
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
 (:func:`ngfrac.scene.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
 them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
+``NGFRAC_THREADS`` caps the threads of a run (applied by :func:`ngfrac.runner.run_scene`).
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from .io.checkpoint import CheckpointError
 from .scene.checks import ResolutionWarning, resolution_warnings
 from .mesh.domains import MeshingError
 from .io.output import OutputError
-from .io.results import ResultsError
+from .io.hdf5 import ResultsError
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
 
@@ -30,7 +31,8 @@ class _Strict(Exception):
     """--strict and the scene has resolution warnings (already printed)."""
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``ngfrac`` argument parser: the subcommands and flags of the user guide's CLI table."""
     parser = argparse.ArgumentParser(prog="ngfrac", description="Phase-field crack propagation "
                                      "on adaptive NGSolve meshes.")
     parser.add_argument("--version", action="version", version=_version_line(),
@@ -115,8 +117,7 @@ def _warn_resolution(scene: Scene, strict: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
+    from .io.writers import Progress
     from .runner import run_scene
 
     if bool(args.scene) == bool(args.restart):
@@ -132,25 +133,11 @@ def _run(args: argparse.Namespace) -> int:
         scene = load_scene(args.scene, args.overrides)
         out = Path(args.out)
     _warn_resolution(scene, args.strict)
-    dt = scene.time.dt
-    bar = tqdm(total=scene.time.n_ticks, unit="dt", disable=args.no_progress,
-               desc=scene.name, dynamic_ncols=True)
-    state = {"tip_x": float("nan")}
-
-    def progress(record) -> None:
-        if record.has_diagnostics:
-            state["tip_x"] = record.tip_x
-        bar.set_postfix(t=f"{record.t:.4g}", nv=record.nv, tip_x=f"{state['tip_x']:.3f}", refresh=False)
-        bar.update(round(record.t / dt) - bar.n)
-
-    try:
-        with warnings.catch_warnings():  # printed above, once
-            warnings.simplefilter("ignore", ResolutionWarning)
-            summary = run_scene(scene, out, overwrite=args.overwrite, on_record=progress,
-                                plots=not args.no_plots, restart=bool(args.restart),
-                                on_start=lambda stepper: bar.update(stepper.ticks))
-    finally:
-        bar.close()
+    with warnings.catch_warnings():  # printed above, once
+        warnings.simplefilter("ignore", ResolutionWarning)
+        summary = run_scene(scene, out, overwrite=args.overwrite, plots=not args.no_plots,
+                            restart=bool(args.restart),
+                            writers=[Progress(scene, disable=args.no_progress)])
     last = summary.last
     print(f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
           f"crack length {last.crack_length:.4f}, tip ({last.tip_x:.3f}, {last.tip_y:.3f}); "
@@ -162,7 +149,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``ngfrac`` command."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO if getattr(args, "verbose", False) else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:

@@ -9,6 +9,9 @@ ridge of z) and the plots. ``restart=True`` continues a folder from its
 checkpoint: rows and snapshots written after the checkpoint are dropped, so the continued
 history equals an uninterrupted one; a changed scene (``time.t_end``, ``[output]``) replaces
 ``scene.toml`` and the restart is appended to ``run.json``.
+
+:func:`run_scene` is a loop over ``stepper.run()`` that hands each record to the writers of
+:mod:`ngfrac.io.writers` (:func:`~ngfrac.io.writers.default_writers` and any given).
 """
 from __future__ import annotations
 
@@ -19,27 +22,23 @@ import math
 import time
 import tomllib
 import warnings
-from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
-from .io.checkpoint import resume, save_checkpoint
-from .scene.checks import ResolutionWarning, resolution_warnings
-from .post.crackpath import crack_path_rows, final_ridge
-from .post.fields import snapshot_fields
-from .io.output import (HistoryWriter, Manifest, OutputError, VTKSeries, atomic_write_text,
-                     prepare_output_dir, read_run_json, run_metadata, to_toml, write_run_json)
-from .io.plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
-from .io.results import ResultsWriter
+from .environment import set_threads
+from .io.checkpoint import resume
+from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
+                        to_toml, write_run_json)
+from .io.writers import (CHECKPOINT, PLOTS, RunFolder, VTKSnapshots, Writer, Writers,
+                         default_writers, run_info, write_crack_path, write_plots, write_snapshot)
 from .scene import Scene
+from .scene.checks import ResolutionWarning, resolution_warnings
 from .solve.stepper import PhaseFieldStepper, StepRecord
 
-log = logging.getLogger(__name__)
+__all__ = ["RunSummary", "open_run", "record_restart", "run_scene"]
 
-CHECKPOINT = "checkpoint.h5"
-PLOTS = ("history.png", "crack.png", "force_displacement.png")
-"""The files :func:`write_plots` may write (listed in the manifest while it runs)."""
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -53,68 +52,23 @@ class RunSummary:
     """The per-phase timing table (see :class:`ngfrac.solve.profiling.PhaseTimer`)."""
 
 
-def write_snapshot(series: VTKSeries, stepper: PhaseFieldStepper) -> None:
-    """One VTK snapshot: u, z, gamma and the derived fields of :func:`ngfrac.post.fields.snapshot_fields`
-    (energy density, stress, estimator, element size)."""
-    series.write(stepper.mesh, snapshot_fields(stepper), stepper.t)
-
-
-def write_crack_path(out: Path, stepper: PhaseFieldStepper) -> Path:
-    """crack_path.csv: the tip track of history.csv and the final ridge of z (2D with an
-    initial crack; :func:`ngfrac.post.crackpath.crack_path_rows` has the layout)."""
-    history = read_history(out / "history.csv")
-    ridge = final_ridge(stepper.scene, stepper.mesh, stepper.z)
-    header, rows = crack_path_rows(history, ridge, stepper.k, stepper.t)
-    path = out / "crack_path.csv"
-    with HistoryWriter(path, header) as writer:
-        for row in rows:
-            writer.write(row)
-    return path
-
-
-def write_plots(out: Path, stepper: PhaseFieldStepper) -> None:
-    """history.png, crack.png (z with the tip path) and force_displacement.png (if any)."""
-    import numpy as np
-
-    plot_history(out / "history.csv", out / "history.png")
-    history = read_history(out / "history.csv")
-    tips = np.column_stack([history[c] for c in ("tip_x", "tip_y", "tip_z") if c in history])
-    z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
-    plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
-                     title=f"{stepper.scene.name}: z at t = {stepper.t:.4g}",
-                     path=tips[np.all(np.isfinite(tips), axis=1)])
-    plot_force_displacement(history, out / "force_displacement.png")
-
-
-def _start(scene: Scene, out: Path, overwrite: bool,
-           restart: bool) -> tuple[PhaseFieldStepper, Manifest, dict[str, Any]]:
-    """The stepper, the folder's manifest and its run.json data (written here)."""
-    if restart:
-        checkpoint = out / CHECKPOINT
-        if not checkpoint.exists():
-            raise OutputError(f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
-                              "(written every output.checkpoint_every steps)")
-        stepper = resume(checkpoint, scene)
-        manifest = Manifest.load(out) or Manifest.adopt(out)
-        manifest.save()
-        return stepper, manifest, record_restart(out, scene, stepper, manifest)
-    manifest = prepare_output_dir(out, overwrite)
-    with manifest.writing("scene.toml"):
-        atomic_write_text(out / "scene.toml", to_toml(scene.to_dict()))
-    info = run_info(scene)
-    write_run_json(out, info, manifest)
-    return PhaseFieldStepper(scene), manifest, info
-
-
-def run_info(scene: Scene) -> dict[str, Any]:
-    """The ``run.json`` data of a new run of ``scene`` (also results.h5's root attributes).
-
-    :func:`~ngfrac.io.output.run_metadata` (versions, git commit, threads, command line, start
-    time), the scene's name, its resolution warnings (``resolution_warnings``, a list of
-    lines, empty when the scene resolves its crack) and an empty ``restarts`` list.
-    """
-    return {"scene": scene.name, **run_metadata(),
-            "resolution_warnings": resolution_warnings(scene), "restarts": []}
+def open_run(scene: Scene, out: Path, overwrite: bool = False,
+             restart: bool = False) -> tuple[PhaseFieldStepper, RunFolder]:
+    """The stepper and the run folder of a new run (:meth:`RunFolder.create
+    <ngfrac.io.writers.RunFolder.create>`) or of a restart from the folder's checkpoint
+    (its scene and the restart recorded by :func:`record_restart`)."""
+    if not restart:
+        folder = RunFolder.create(out, scene, overwrite)
+        return PhaseFieldStepper(scene), folder
+    checkpoint = out / CHECKPOINT
+    if not checkpoint.exists():
+        raise OutputError(f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
+                          "(written every output.checkpoint_every steps)")
+    stepper = resume(checkpoint, scene)
+    manifest = Manifest.load(out) or Manifest.adopt(out)
+    manifest.save()
+    info = record_restart(out, scene, stepper, manifest)
+    return stepper, RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
 
 
 def _flat_keys(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -168,19 +122,26 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
               plots: bool = True,
               on_step: Callable[[PhaseFieldStepper], None] | None = None,
               restart: bool = False,
-              on_start: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
+              on_start: Callable[[PhaseFieldStepper], None] | None = None,
+              writers: Sequence[Writer] = ()) -> RunSummary:
     """Run ``scene`` to its end time, writing history, VTK, results, checkpoints and plots.
+
+    The files are written by :func:`~ngfrac.io.writers.default_writers`; ``NGFRAC_THREADS``,
+    when set, caps NGSolve's threads first (:func:`ngfrac.environment.set_threads`).
 
     Parameters
     ----------
     scene : Scene
-    out_dir : path of the run folder
+    out_dir : str or Path
+        The run folder.
     overwrite : replace an earlier run in that folder (only the files ngfrac writes)
-    on_record : called with every step record (the CLI's progress bar)
+    on_record : called with every step record
     plots : write history.png and crack.png at the end
     on_step : called with the stepper after set-up and after every step (for checks in tests)
     restart : continue the run in ``out_dir`` from its checkpoint
-    on_start : called once with the stepper before the first step (e.g. to place a progress bar)
+    on_start : called once with the stepper before the first step
+    writers : more writers (:class:`~ngfrac.io.writers.Writer`), called after the default ones,
+        e.g. :class:`~ngfrac.io.writers.Progress`
 
     Warns
     -----
@@ -190,65 +151,26 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     """
     for message in resolution_warnings(scene):
         warnings.warn(message, ResolutionWarning, stacklevel=2)
+    set_threads()
     started = time.perf_counter()
-    out = Path(out_dir)
-    stepper, manifest, info = _start(scene, out, overwrite, restart)
+    stepper, folder = open_run(scene, Path(out_dir), overwrite, restart)
     stepper.timer.add("set-up (mesh, spaces, z0, u0)", time.perf_counter() - started)
     if on_start is not None:
         on_start(stepper)
-    output = scene.output
-    subdivision = output.vtk_subdivision if output.vtk_subdivision >= 0 else scene.discretization.order - 1
-    series = VTKSeries(out / "vtk", subdivision, manifest=manifest)
+    defaults = default_writers(folder, scene, plots)
     record = stepper.record()
     if on_step is not None:
         on_step(stepper)
-    with ExitStack() as stack:
-        with manifest.writing("history.csv"):
-            history = stack.enter_context(HistoryWriter(
-                out / "history.csv", record.header(), resume_after=stepper.k if restart else None))
-        results = None
-        if output.results:
-            with manifest.writing("results.h5", "results.xdmf"):
-                results = (ResultsWriter.resume(out / "results.h5", scene, stepper.k) if restart
-                           else ResultsWriter(out / "results.h5", scene, overwrite=overwrite))
-            stack.callback(results.close)
-            results.set_attributes(info)
-        if restart:
-            series.resume(stepper.t)
-        else:
-            history.write(record.row())
-            if results is not None:
-                results.append(record)
-            if output.vtk_every:
-                write_snapshot(series, stepper)
-                if results is not None:
-                    results.write_snapshot(stepper)
-        timer = stepper.timer
+    with Writers([*defaults, *writers]) as all_writers:
+        all_writers.start(stepper, record)
         for record in stepper.run():
-            if record.has_diagnostics:
-                with timer.phase("output: history"):
-                    history.write(record.row())
-                    if results is not None:
-                        results.append(record)
-            if output.vtk_every and stepper.output_due(output.vtk_every) or stepper.finished:
-                with timer.phase("output: VTK and snapshots"):
-                    write_snapshot(series, stepper)
-                    if results is not None:
-                        results.write_snapshot(stepper)
-            # after the other writes, so a restart's "drop what came after k" stays consistent
-            if output.checkpoint_every and record.step % output.checkpoint_every == 0:
-                with (timer.phase("output: checkpoint"),
-                      manifest.writing(CHECKPOINT, "checkpoint.tmp")):
-                    save_checkpoint(stepper, out / CHECKPOINT)
+            all_writers.record(stepper, record)
             if on_record is not None:
                 on_record(record)
             if on_step is not None:
                 on_step(stepper)
-    with stepper.timer.phase("output: crack path"), manifest.writing("crack_path.csv"):
-        write_crack_path(out, stepper)
-    if plots:
-        with stepper.timer.phase("output: plots"), manifest.writing(*PLOTS):
-            write_plots(out, stepper)
+        all_writers.finish(stepper)
     log.info("run %s finished at t=%g in %.1f s", scene.name, record.t, record.wall_s)
     wall = time.perf_counter() - started
-    return RunSummary(out, record, len(series.entries), stepper.timer.table(total=wall))
+    snapshots = next(w.n_snapshots for w in defaults if isinstance(w, VTKSnapshots))
+    return RunSummary(folder.path, record, snapshots, stepper.timer.table(total=wall))

@@ -1,10 +1,17 @@
-"""Shared pytest options: ``--runslow`` enables studies marked ``slow``."""
+"""Shared pytest options: ``--runslow`` enables studies marked ``slow``. NGFRAC_THREADS, when
+set, caps NGSolve's threads for the whole session (importing ngfrac does not)."""
 import pytest
 
 
 def pytest_addoption(parser):
     parser.addoption("--runslow", action="store_true", default=False,
                      help="also run tests marked slow (long convergence studies)")
+
+
+def pytest_sessionstart(session):
+    import ngfrac
+
+    ngfrac.set_threads()
 
 
 def pytest_collection_modifyitems(config, items):

@@ -37,8 +37,8 @@ import h5py
 import ngsolve as ngs
 import numpy as np
 
-from .results import (IGNORED_KEYS, MeshArrays, ResultsError, StoredField, check_format,
-                      read_hdf5, read_scene, scene_differences, scene_hash, write_scene)
+from .hdf5 import (IGNORED_KEYS, MeshArrays, ResultsError, StoredField, check_format,
+                   read_hdf5, read_scene, scene_differences, scene_hash, write_scene)
 from ..scene import Scene
 from ..solve.state import StepperState
 

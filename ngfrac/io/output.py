@@ -322,8 +322,8 @@ class VTKSeries:
         NGSolve writes every element on its own, refined ``subdivision`` times (2^s
         intervals per edge): (n+1)(n+2)/2 points per triangle, (n+1)(n+2)(n+3)/6 per
         tetrahedron, each with 3 coordinates and the field values as float64, plus about
-        8 dim bytes of cell connectivity per point (measured against NGSolve 6.2 files:
-        within 10 % for subdivision 0 to 3).
+        8 dim bytes of cell connectivity per point (its accuracy: docs/user-guide.md, "VTK
+        snapshots").
         """
         n = 2 ** self.subdivision
         points = ((n + 1) * (n + 2) // 2 if mesh.dim == 2
@@ -408,7 +408,7 @@ def git_revision() -> tuple[str | None, bool | None]:
 
     ``(None, None)`` when ngfrac is not run from a git checkout of itself or git is missing.
     """
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[2]  # ngfrac/io/output.py -> the checkout
     if not (root / "setup.cfg").exists():
         return None, None  # an installed copy, not a checkout
 

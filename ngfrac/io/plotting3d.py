@@ -32,7 +32,8 @@ def plot_phase_field_3d(mesh: ngs.Mesh, z_vertex_values: np.ndarray, png: str | 
     mesh : ngsolve.Mesh
         A 3D mesh.
     z_vertex_values : (nv,) array
-    png : path of the image
+    png : str or Path
+        The image file.
     title : str
     path : (m, 2 or 3) array, optional
         Tip positions, drawn on both panels.

@@ -192,3 +192,14 @@ def test_run_warns_once_and_strict_writes_nothing(tmp_path, capfd):
     err = capfd.readouterr().err
     assert err.count("ngfrac: warning: geometry.mesh_size = 0.05 is above epsilon/2 = 0.04") == 1
     assert (tmp_path / "run" / "history.csv").exists()
+
+
+def test_progress_bar_counts_the_time_steps(tmp_path):
+    """The bar (the Progress writer) ends at the scene's last tick, on stderr."""
+    overrides = [arg for arg in QUICK if arg != "--no-progress"]
+    result = ngfrac("run", SLIT, "--out", str(tmp_path / "run"), *overrides,
+                    "--set", "adaptivity.enabled=false", "--set", "discretization.order=1",
+                    "--no-plots")
+    assert result.returncode == 0, result.stderr
+    assert re.search(r"mode3_slit: 100%.*\b4/4 \[", result.stderr), result.stderr
+    assert "tip_x=" in result.stderr

@@ -45,7 +45,7 @@ def test_mesh_picture_of_a_3d_mesh(tmp_path):
     from netgen.csg import unit_cube
     import ngsolve as ngs
 
-    from ngfrac.io.results import MeshArrays
+    from ngfrac.io.hdf5 import MeshArrays
 
     arrays = MeshArrays.of(ngs.Mesh(unit_cube.GenerateMesh(maxh=0.5)))
     png = plot_mesh(arrays.coordinates, arrays.cells, tmp_path / "mesh.png", facets=arrays.facets)

@@ -319,3 +319,70 @@ def test_resolution_warnings_are_recorded_in_the_run_folder(tmp_path):
     assert any("max_vertices = 100" in line for line in info["resolution_warnings"])
     with h5py.File(out / "results.h5", "r") as f:
         assert json.loads(f.attrs["resolution_warnings"]) == info["resolution_warnings"]
+
+
+# -- writers: the run's files from a script's own loop ------------------------------------------
+TIMING = {"wall_s", "step_s", "solve_s", "adapt_s"}
+
+
+def tiny_scene():
+    from ngfrac import load_scene
+
+    return load_scene(SLIT, [value for flag, value in zip(TINY[:-1:2], TINY[1::2])
+                             if flag == "--set"])
+
+
+def history_without_timings(folder):
+    import csv
+
+    with open(folder / "history.csv", newline="") as handle:
+        return [{k: v for k, v in row.items() if k not in TIMING} for row in csv.DictReader(handle)]
+
+
+def test_a_script_loop_with_the_default_writers_writes_what_run_scene_writes(tmp_path):
+    """The user guide's example (Python API): the same files, manifest and history."""
+    from ngfrac import PhaseFieldStepper, run_scene
+    from ngfrac.io.writers import RunFolder, Writers, default_writers
+
+    scene = tiny_scene()
+    run_scene(scene, tmp_path / "run", plots=False)
+    folder = RunFolder.create(tmp_path / "script", scene, overwrite=True)
+    stepper = PhaseFieldStepper(scene)
+    with Writers(default_writers(folder, scene, plots=False)) as writers:
+        writers.start(stepper, stepper.record())
+        for record in stepper.run():
+            writers.record(stepper, record)
+        writers.finish(stepper)
+    run, script = tmp_path / "run", tmp_path / "script"
+    assert Manifest.load(script).entries == Manifest.load(run).entries
+    assert sorted(p.relative_to(script) for p in script.rglob("*")) == \
+        sorted(p.relative_to(run) for p in run.rglob("*"))
+    assert history_without_timings(script) == history_without_timings(run)
+    assert (script / "crack_path.csv").read_text() == (run / "crack_path.csv").read_text()
+    assert list(open_results(script / "results.h5").snapshot_steps()) == [0, 2, 4]
+
+
+def test_run_scene_calls_more_writers_in_order(tmp_path):
+    from ngfrac import run_scene
+    from ngfrac.io.writers import Writer
+
+    class Log(Writer):
+        def __init__(self):
+            self.calls = []
+
+        def start(self, stepper, record):
+            self.calls.append(("start", record.step))
+
+        def record(self, stepper, record):
+            self.calls.append(("record", record.step))
+
+        def finish(self, stepper):
+            self.calls.append(("finish", stepper.k))
+
+        def close(self):
+            self.calls.append(("close",))
+
+    log = Log()
+    run_scene(tiny_scene(), tmp_path / "run", plots=False, writers=[log])
+    assert log.calls == [("start", 0), ("record", 1), ("record", 2), ("record", 3),
+                         ("record", 4), ("finish", 4), ("close",)]

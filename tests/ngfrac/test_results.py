@@ -10,8 +10,8 @@ import pytest
 
 from ngfrac.mesh.domains import build_mesh, netgen_geometry
 from ngfrac.mesh.remesh import remesh
-from ngfrac.io.results import (FORMAT_VERSION, MeshArrays, ResultsError, ResultsWriter,
-                            StoredField, open_results)
+from ngfrac.io.hdf5 import MeshArrays, ResultsError, StoredField
+from ngfrac.io.results import FORMAT_VERSION, ResultsWriter, open_results
 from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 
 from scenes import quick_slit
@@ -275,7 +275,8 @@ def test_changed_scene_text_is_detected(valid_file):
 def test_file_open_in_a_running_writer(valid_file, scene):
     """HDF5 locks a file being written; the reader says so instead of 'corrupt'."""
     with ResultsWriter(valid_file, scene, overwrite=True):
-        code = ("from ngfrac.io.results import open_results, ResultsError\n"
+        code = ("from ngfrac.io.hdf5 import ResultsError\n"
+                "from ngfrac.io.results import open_results\n"
                 f"try:\n    open_results({str(valid_file)!r})\n"
                 "except ResultsError as err:\n    print(err)\n")
         result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
