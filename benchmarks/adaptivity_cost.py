@@ -14,12 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
+import ngfrac
 from ngfrac import PhaseFieldStepper, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv: list[str]) -> None:
+    ngfrac.set_threads()  # NGFRAC_THREADS (importing ngfrac sets nothing)
     scene_path = argv.pop(0) if argv and not argv[0].startswith("--") else ROOT / "demos/mode3_slit.toml"
     overrides = [value for flag, value in zip(argv[::2], argv[1::2]) if flag == "--set"]
     scene = load_scene(scene_path, ["output.history_every=1000000", *overrides])

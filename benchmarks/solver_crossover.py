@@ -29,7 +29,9 @@ import time
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
-import ngfrac  # noqa: F401  (applies NGFRAC_THREADS)
+import ngfrac
+
+ngfrac.set_threads()  # NGFRAC_THREADS
 
 LAM, MU, ETA = 121.15, 80.77, 1e-6
 

@@ -22,6 +22,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "stress"), str(ROOT / "tests")]
 
 import ngsolve as ngs  # noqa: E402
 import numpy as np  # noqa: E402
+import ngfrac
 from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
 
 import stress_cases as sc  # noqa: E402
@@ -76,6 +77,7 @@ def _verdict(found: list[str], energy: list[str], wrong_step: list[str] = ()) ->
 
 
 def main(argv: list[str]) -> int:
+    ngfrac.set_threads()  # NGFRAC_THREADS (importing ngfrac sets nothing)
     threads = 1
     if "--threads" in argv:
         i = argv.index("--threads")

@@ -24,7 +24,9 @@ ROOT = Path(__file__).resolve().parents[1]
 WORKER = """
 import hashlib, json, resource, sys, time
 import numpy as np
+import ngfrac
 from ngfrac import PhaseFieldStepper, load_scene
+ngfrac.set_threads()  # NGFRAC_THREADS
 scene = load_scene(sys.argv[1], sys.argv[3:])
 stepper = PhaseFieldStepper(scene)
 steps = int(sys.argv[2])

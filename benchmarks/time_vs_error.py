@@ -49,6 +49,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+import ngfrac
 from ngfrac import PhaseFieldStepper, load_scene
 from ngfrac.physics.cracks import distance_to_polylines
 
@@ -271,6 +272,7 @@ def plot(rows: list[dict], path: Path, title: str) -> None:
 
 
 def main() -> None:
+    ngfrac.set_threads()  # NGFRAC_THREADS (importing ngfrac sets nothing)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--preset", choices=sorted(presets()), default="full")
     parser.add_argument("--quick", action="store_true", help="same as --preset quick")

@@ -21,6 +21,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+import ngfrac
+
 HERE = Path(__file__).resolve().parent
 VARIANTS = {
     "default": [],
@@ -40,6 +42,7 @@ def _time_vs_error():
 
 
 def main() -> None:
+    ngfrac.set_threads()  # NGFRAC_THREADS (importing ngfrac sets nothing)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("caps", nargs="*", type=int, default=[2000, 3000, 4000, 6000])
     parser.add_argument("--reference", default="out/time_vs_error_quick/reference.h5")

@@ -20,7 +20,6 @@ sys.path.insert(0, str(ROOT))  # the packages, before tests/ (which has a folder
 sys.path.insert(1, str(ROOT / "tests"))
 
 from ngfrac.mesh.domains import build_mesh  # noqa: E402
-from ngfrac.io.plotting import _pyplot  # noqa: E402
 from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
 from ngfrac.post.studies import fit_rate  # noqa: E402
 from scenes import demo_data, quick_slit, scene_from  # noqa: E402
@@ -90,6 +89,16 @@ def energy(lines: list[str], plt) -> None:
     fig.savefig(FIGURES / "verification_energy.png", dpi=110)
     plt.close(fig)
     lines += ["", "![energy](figures/verification_energy.png)", ""]
+
+
+def _pyplot():
+    """pyplot with the Agg backend (this script writes PNG files, no window)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def main() -> None:
