@@ -16,13 +16,16 @@ import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar, Mapping, get_type_hints
+from typing import TYPE_CHECKING, Any, ClassVar, Mapping, get_type_hints
 
 import numpy as np
 
 from .checks import check_times, crack_problems, nonfinite_value
 from ..physics.crack_models import CRACK_MODELS
 from .expressions import Expression, ExpressionError
+
+if TYPE_CHECKING:
+    from ..mesh.domains import Domain
 
 MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
 """Model names a scene may choose (``model.kind``)."""
@@ -338,48 +341,12 @@ class Geometry(_Section):
     def boundary_names(self) -> tuple[str, ...]:
         return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
 
-    @property
-    def face_names(self) -> tuple[tuple[str, str], ...]:
-        """Per axis, the names of the boundary at its low and its high end."""
-        if self.dim == 3:
-            return (("left", "right"), ("bottom", "top"), ("back", "front"))
-        return (("left", "right"), ("bottom", "top"))
+    def domain(self) -> "Domain":
+        """The domain this section describes (:func:`ngfrac.mesh.domains.domain_of`): its
+        boundary and containment tests, measure and sample points live there."""
+        from ..mesh.domains import domain_of
 
-    def on_boundary(self, point: Any, tol: float | None = None) -> bool:
-        """Whether a point of the closed domain lies on its boundary (within ``tol``; default
-        1e-9 of the diagonal)."""
-        tol = 1e-9 * math.hypot(*self.extent) if tol is None else tol
-        return any(abs(p - o) <= tol or abs(p - o - e) <= tol
-                   for p, o, e in zip(point, self.origin, self.extent))
-
-    def boundary_points(self, name: str, n: int = 0) -> tuple[np.ndarray, ...]:
-        """A regular grid on one named boundary, for checking load expressions: n points
-        per edge (0: 201 on a side of a rectangle, 41 x 41 on a face of a box)."""
-        n = n or (201 if self.dim == 2 else 41)
-        for axis, names in enumerate(self.face_names):
-            if name in names:
-                break
-        else:
-            raise ValueError(f"{name!r} is not a boundary of the geometry")
-        axes = [np.linspace(o, o + e, n) for o, e in zip(self.origin, self.extent)]
-        o, e = self.origin[axis], self.extent[axis]
-        axes[axis] = np.array([o if name == names[0] else o + e])
-        return tuple(a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-
-    def contains(self, point: tuple[float, ...], tol: float = 1e-12) -> bool:
-        """Whether a point (of the domain's dimension) lies in the closed rectangle or box."""
-        if len(point) != self.dim:
-            return False
-        return all(o - tol <= p <= o + e + tol for p, o, e in zip(point, self.origin, self.extent))
-
-    def sample_points(self, n: int = 0) -> tuple[np.ndarray, ...]:
-        """A regular grid over the domain, for checking expressions: (xs, ys) or (xs, ys, zs).
-
-        ``n`` points per side; 0 means 201 in 2D and 41 in 3D.
-        """
-        n = n or (201 if self.dim == 2 else 41)
-        axes = [np.linspace(o, o + e, n) for o, e in zip(self.origin, self.extent)]
-        return tuple(a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
+        return domain_of(self)
 
 
 @dataclass(frozen=True)
@@ -670,8 +637,9 @@ class Scene:
                 raise SceneError(f"cracks[{i}].points = {[list(p) for p in crack.points]} has "
                                  f"{crack.dim}D points, but geometry.kind = {self.geometry.kind!r} "
                                  f"is {self.geometry.dim}D: give {example}")
+            domain = self.geometry.domain()
             for point in crack.points:
-                if not self.geometry.contains(point):
+                if not domain.contains(point, tol=1e-12):
                     raise SceneError(f"cracks[{i}].points: point {list(point)} lies outside the "
                                      f"domain {self._domain_text()}")
         normals = [c.normal for c in self.cracks] if self.geometry.dim == 3 else []
@@ -711,10 +679,10 @@ class Scene:
         times = check_times(self.time.n_ticks * self.time.dt)
         checks = []
         for i, load in enumerate(self.loads):
-            where = self.geometry.boundary_points(load.boundary)
+            where = self.geometry.domain().boundary_points(load.boundary)
             checks.append((f"loads[{i}].value", load.value, where, f"on boundary {load.boundary!r}"))
         checks.append(("material.body_force", self.material.body_force,
-                       self.geometry.sample_points(), "in the domain"))
+                       self.geometry.domain().sample_points(), "in the domain"))
         for key, value, where, place in checks:
             parts = value if isinstance(value, Components) else (value,)
             for k, part in enumerate(parts):
@@ -751,7 +719,7 @@ class Scene:
         dim = self.geometry.dim
         if "z" in gamma.names and dim == 2:
             raise SceneError(f"material.gamma = {gamma.text!r} uses z, but the domain is 2D")
-        coordinates = self.geometry.sample_points()
+        coordinates = self.geometry.domain().sample_points()
         names = "xyz"[:dim]
         values = np.broadcast_to(gamma.evaluate_numpy(dict(zip(names, coordinates))),
                                  coordinates[0].shape)
