@@ -3,7 +3,7 @@ docs/figures/verification_*.png.
 
     python docs/make_verification.py
 
-It runs, from the checks the tests assert (tests/ holds the problem definitions):
+It runs, from the checks the tests assert (ngfrac.testing holds the problem definitions):
 the manufactured-solution convergence of the u-solve (orders 1-3), the surface energy of the
 optimal profile (aligned and not aligned meshes), and the energy history with the load held.
 """
@@ -16,17 +16,14 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # the packages, before tests/ (which has a folder named estimators)
-sys.path.insert(1, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))  # the packages of this checkout, installed or not
 
 from ngfrac.mesh.domains import build_mesh  # noqa: E402
 from ngfrac.io.plotting import _pyplot  # noqa: E402
 from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
 from ngfrac.post.studies import fit_rate  # noqa: E402
-from scenes import demo_data, quick_slit, scene_from  # noqa: E402
-
-sys.path.insert(1, str(ROOT / "tests" / "convergence"))
-from test_u_solve import errors as u_errors  # noqa: E402
+from ngfrac.testing.manufactured import u_errors  # noqa: E402
+from ngfrac.testing.scenes import demo_data, quick_slit, scene_from  # noqa: E402
 
 FIGURES = ROOT / "docs" / "figures"
 

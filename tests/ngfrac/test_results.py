@@ -14,7 +14,7 @@ from ngfrac.io.results import (FORMAT_VERSION, MeshArrays, ResultsError, Results
                             StoredField, open_results)
 from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 
 @pytest.fixture(scope="module", autouse=True)

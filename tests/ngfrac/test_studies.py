@@ -12,7 +12,7 @@ from ngfrac.solve.stepper import PhaseFieldStepper
 from ngfrac.post.studies import StudyRun, convergence_study, fit_rate, scene_with
 
 from convergence.test_u_solve import scene as u_solve_scene
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 EXACT = ngs.sin(ngs.pi * ngs.x) * ngs.sin(ngs.pi * ngs.y)
 GRAD_EXACT = ngs.CoefficientFunction((ngs.pi * ngs.cos(ngs.pi * ngs.x) * ngs.sin(ngs.pi * ngs.y),

@@ -20,13 +20,13 @@ from typing import Callable
 import numpy as np
 import ngsolve as ngs
 
-from ngfrac.io.checkpoint import load_checkpoint
-from ngfrac.physics.cracks import optimal_profile
-from ngfrac.runner import CHECKPOINT, run_scene
-from ngfrac.scene import Components, Scene
-from ngfrac.solve.stepper import PhaseFieldStepper, SolverError
+from ..io.checkpoint import load_checkpoint
+from ..physics.cracks import optimal_profile
+from ..runner import CHECKPOINT, run_scene
+from ..scene import Components, Scene
+from ..solve.stepper import PhaseFieldStepper, SolverError
 
-from scenes import demo_data, scene_from
+from .scenes import demo_data, scene_from
 
 TOL = 1e-12
 """Round-off allowed in the bounds, in the monotonicity of z and (relative) in the energy."""
@@ -61,8 +61,9 @@ def plane_strain(expression: str, *overrides: str) -> Scene:
 
 
 # -- the checks ---------------------------------------------------------------------------
-def _load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
-    """The values of every load and body-force expression at sample points, at time t."""
+def load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
+    """The values of every load and body-force expression at points of the rectangle's four
+    sides, at time t."""
     g = scene.geometry
     x0, y0 = g.origin
     s = np.linspace(0.0, 1.0, 17)
@@ -70,14 +71,44 @@ def _load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
                          np.full_like(s, x0)])
     ys = np.concatenate([np.full_like(s, y0), y0 + s * g.height, np.full_like(s, y0 + g.height),
                          y0 + s * g.height])
-    expressions = []
-    for value in [load.value for load in scene.loads] + [scene.material.body_force]:
-        entries = value if isinstance(value, Components) else (value,)
-        expressions += [e for e in entries if not isinstance(e, str)]
+    expressions = _load_expressions(scene)
 
     def sample(t: float) -> np.ndarray:
         return np.concatenate([np.broadcast_to(e.evaluate_numpy({"x": xs, "y": ys, "t": t}),
                                                xs.shape) for e in expressions])
+    return sample
+
+
+def _load_expressions(scene: Scene) -> list:
+    """Every load component and the body force that is an expression (not ``free``)."""
+    expressions = []
+    for value in [load.value for load in scene.loads] + [scene.material.body_force]:
+        entries = value if isinstance(value, Components) else (value,)
+        expressions += [e for e in entries if not isinstance(e, str)]
+    return expressions
+
+
+def box_load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
+    """Every load expression at points of the box's six faces, at time t (the 3D version of
+    :func:`load_sampler`)."""
+    g = scene.geometry
+    s = np.linspace(0.0, 1.0, 7)
+    u, v = (a.ravel() for a in np.meshgrid(s, s))
+    points = []
+    for axis in range(3):
+        for end in (0.0, 1.0):
+            p = np.empty((len(u), 3))
+            others = [i for i in range(3) if i != axis]
+            p[:, axis] = end
+            p[:, others[0]], p[:, others[1]] = u, v
+            points.append(np.asarray(g.origin) + p * np.asarray(g.extent))
+    xs, ys, zs = np.vstack(points).T
+    expressions = _load_expressions(scene)
+
+    def sample(t: float) -> np.ndarray:
+        return np.concatenate([np.broadcast_to(e.evaluate_numpy({"x": xs, "y": ys, "z": zs, "t": t}),
+                                               xs.shape) for e in expressions])
+
     return sample
 
 
@@ -86,6 +117,8 @@ class StabilityMonitor:
     """Watches a stepper step by step; call :meth:`observe` after every step."""
 
     stepper: PhaseFieldStepper
+    sampler: Callable[[Scene], Callable[[float], np.ndarray]] = load_sampler
+    """Makes the load sampler of the stepper's scene (:func:`box_load_sampler` for a box)."""
     z_outside: float = 0.0
     """Largest violation of 0 <= z <= 1 at a node."""
     z_decrease: float = 0.0
@@ -98,7 +131,7 @@ class StabilityMonitor:
     records: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self._sample = _load_sampler(self.stepper.scene)
+        self._sample = self.sampler(self.stepper.scene)
         self._previous = self.stepper.record()
         self._values = self._check_state(self._previous)
         self.records.append(self._previous)
@@ -182,6 +215,8 @@ class StressCase:
     energy_known: str | None = None
     """Why E_total is known to rise in this case (a library weakness); :func:`problems`
     then leaves the energy out and :func:`energy_problems` reports it."""
+    sampler: Callable[[Scene], Callable[[float], np.ndarray]] = load_sampler
+    """Makes the sampler that tells whether the load is held (:func:`box_load_sampler` for a box)."""
 
 
 def run_case(case: StressCase) -> CaseResult:
@@ -191,7 +226,7 @@ def run_case(case: StressCase) -> CaseResult:
     stepper = PhaseFieldStepper(scene)
     if case.prepare is not None:
         case.prepare(stepper)
-    monitor = StabilityMonitor(stepper)
+    monitor = StabilityMonitor(stepper, case.sampler)
     for record in stepper.run(history_every=1):
         monitor.observe(record)
     return CaseResult(case, scene, stepper, monitor, time.perf_counter() - started)
@@ -388,6 +423,41 @@ CASES: list[StressCase] = [
                check_crosses, slow=True, min_held=2500),
 ]
 CASE_BY_NAME = {case.name: case for case in CASES}
+
+
+# -- the 3D case --------------------------------------------------------------------------
+def box_scene_data() -> dict:
+    """A unit cube pulled apart in y (top face y = 1 up, bottom face y = 0 clamped), the
+    load ramped to t = 0.1 and then held: the 3D twin of the held-load stress cases."""
+    data = demo_data()
+    data["model"] = {"kind": "elasticity_3d"}
+    data["material"] = {"E": 50.0, "nu": 0.29, "gamma": 1.0}
+    data["geometry"] = {"kind": "box", "width": 1.0, "height": 1.0, "depth": 1.0, "mesh_size": 0.2}
+    data["cracks"] = []
+    data["loads"] = [{"boundary": "top", "value": ["0", "10*min(t, 0.1)", "0"]},
+                     {"boundary": "bottom", "value": ["0", "0", "0"]}]
+    data["phase_field"]["epsilon"] = 0.2
+    data["time"] = {"dt": 4e-3, "t_end": 0.2}
+    data["adaptivity"] = {"enabled": False}
+    data["discretization"] = {"order": 1}
+    data["output"] = {"vtk_every": 0, "checkpoint_every": 0}
+    return data
+
+
+def check_box_damaged(result: CaseResult) -> list[str]:
+    """The cube damaged and carries less than twice its sound stiffness (E strain area)."""
+    last = result.records[-1]
+    sound = 50.0 * 0.1 * 1.0
+    return (_expect(last.dz_max >= 0 and last.crack_length > 0.01,
+                    f"no damage: crack length {last.crack_length:.3g}")
+            + _expect(0 < last.forces["Fy_top"] < 2 * sound and math.isfinite(last.E_total),
+                      f"force on the top {last.forces['Fy_top']:.3g} outside (0, {2 * sound:g})"))
+
+
+BOX_3D = StressCase("box_3d", "unit cube pulled apart in y (E 50, nu 0.29, h 0.2), P1, ramp "
+                    "and hold", lambda: Scene.from_dict(box_scene_data()), check_box_damaged,
+                    min_held=20, sampler=box_load_sampler)
+"""The 3D case of tests/stress/test_stress_3d.py; its sampler walks the six faces."""
 
 
 # -- a forced solver failure with checkpoints ---------------------------------------------
