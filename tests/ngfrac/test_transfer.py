@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import logging
-import time
 
 import numpy as np
 import ngsolve as ngs
@@ -159,25 +158,3 @@ def test_crack_length_survives_on_crack_aligned_meshes_at_eps_over_2():
     before, after = crack_length(z, EPS), crack_length(z_new, EPS)
     assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.005)
     assert abs(after - before) < 0.001 * before, (before, after)
-
-
-@pytest.mark.slow
-def test_benchmark_transfer(caplog):
-    """Timings of a transfer to a ~5,000-vertex mesh (printed, never asserted on)."""
-    old = crack_mesh(build_mesh(SQUARE, 0.05), h_band=EPS / 3, h_core=EPS / 3, hmax=0.1,
-                     width=6 * EPS)
-    new = crack_mesh(old, h_band=0.3 * EPS, h_core=0.3 * EPS, hmax=0.08, width=5 * EPS)
-    z = profile_field(old, 2)
-    u = ngs.GridFunction(ngs.H1(old, order=2))
-    u.Set(SMOOTH)
-    fes = ngs.H1(new, order=2)
-    started = time.perf_counter()
-    transfer_phase_field(z, z, fes)
-    phase = time.perf_counter() - started
-    timings = []
-    for method in ("set", "nodes"):
-        started = time.perf_counter()
-        transfer(u, fes, method)
-        timings.append(time.perf_counter() - started)
-    print(f"nv {old.nv} -> {new.nv}, {fes.ndof} P2 nodes: transfer_phase_field {phase:.3f} s, "
-          f"transfer(u) set {timings[0]:.3f} s, nodes {timings[1]:.3f} s")
