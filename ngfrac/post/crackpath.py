@@ -30,7 +30,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["CrackPath", "initial_tip", "ridge_path", "connected_part", "final_ridge",
+__all__ = ["CrackPath", "tip_and_direction", "ridge_path", "connected_part", "final_ridge",
            "crack_path_rows", "history_path", "fit_direction",
            "kink_angle", "stress_intensity_from_jump", "mts_kink_angle", "measure_kink",
            "deviation_from_line", "slit_mesh", "SharpCrack", "sharp_crack_solution",
@@ -72,8 +72,21 @@ class CrackPath:
         return "\n".join(rows)
 
 
-def initial_tip(polyline: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
-    """The tip of an initial crack polyline (written mouth to tip) and its unit direction."""
+def tip_and_direction(polyline: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """The tip of a 2D crack polyline and the unit direction of its last segment.
+
+    Parameters
+    ----------
+    polyline : (n, 2) points
+        An initial crack, written from the mouth to the tip.
+
+    Returns
+    -------
+    tip, direction : numpy.ndarray
+        The last point (as :func:`ngfrac.physics.cracks.initial_tip` in 2D) and the unit
+        vector from the last but one point to it: the ``origin`` and ``reference`` of a
+        :class:`CrackPath`.
+    """
     points = np.asarray(polyline, dtype=float)
     direction = points[-1] - points[-2]
     return points[-1], direction / np.linalg.norm(direction)
@@ -154,7 +167,7 @@ def final_ridge(scene, mesh, z, level: float = 0.5) -> CrackPath | None:
     if scene.geometry.dim != 2 or not scene.cracks:
         return None
     eps = scene.phase_field.epsilon
-    origin, reference = initial_tip(scene.cracks[0].points)
+    origin, reference = tip_and_direction(scene.cracks[0].points)
     g = scene.geometry
     corners = np.array([[x, y] for x in (g.origin[0], g.origin[0] + g.width)
                         for y in (g.origin[1], g.origin[1] + g.height)])
@@ -272,7 +285,7 @@ def measure_kink(stepper, rmin: float, rmax: float, n_radii: int = 25,
     Uses the first initial crack of the scene; arcs at ``n_radii`` radii from ``rmin`` to
     ``rmax``. Returns the angle in degrees and the ridge path.
     """
-    origin, reference = initial_tip(stepper.scene.cracks[0].points)
+    origin, reference = tip_and_direction(stepper.scene.cracks[0].points)
     path = ridge_path(stepper.mesh, stepper.z, origin, reference,
                       np.linspace(rmin, rmax, n_radii), level=level)
     return kink_angle(path, rmin, rmax), path

@@ -23,7 +23,7 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import z_indicators
-from .diagnostics import element_sizes
+from .diagnostics import element_diameters
 from ..physics.splits import EnergySplit, principal_strains_3d
 
 if TYPE_CHECKING:
@@ -165,5 +165,5 @@ def snapshot_fields(stepper: "PhaseFieldStepper") -> dict[str, Any]:
         fields["von_mises"] = von_mises(stress, model)
         fields["principal_stress"] = principal_stresses(stress, mesh.dim)
     fields["estimator"] = piecewise_constant(mesh, z_indicators(stepper.scene, z), "estimator")
-    fields["h"] = piecewise_constant(mesh, element_sizes(mesh), "h")
+    fields["h"] = piecewise_constant(mesh, element_diameters(mesh), "h")
     return fields

@@ -27,7 +27,7 @@ from ..mesh.adapter import Adaptation, MeshAdapter
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.crack_models import crack_model
 from ..post.crackset import CrackSet, NodeGraph, find_crack
-from ..post.diagnostics import element_sizes, energies
+from ..post.diagnostics import element_diameters, energies
 from ..mesh.domains import build_mesh
 from ..physics.elastic import make_model
 from .nodal import LagrangeNodes
@@ -333,7 +333,7 @@ class PhaseFieldStepper:
         if self._crack_cache is not None and self._crack_cache[0] == key:
             return self._crack_cache[1]
         if self._sizes is None:
-            self._sizes = element_sizes(self.mesh)
+            self._sizes = element_diameters(self.mesh)
         if self._node_graph is None:
             self._node_graph = NodeGraph(self.mesh, self.nodes)
         eps = self.scene.phase_field.epsilon
