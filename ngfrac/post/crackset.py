@@ -19,6 +19,7 @@ most advanced point of the front), without the ridge test, which needs a 1D crac
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -28,9 +29,11 @@ import ngsolve as ngs
 from scipy import sparse
 from scipy.sparse import csgraph
 
+from ..mesh.remesh import ElementGeometry, edge_numbers
 from ..physics.cracks import distance_to_cracks
+from ..solve.nodal import LagrangeNodes
 
-__all__ = ["CrackSet", "NodeGraph", "find_crack"]
+__all__ = ["CrackSet", "JOINED", "NodeGraph", "find_crack"]
 
 THRESHOLD = 0.5
 """z at and above which a node belongs to a crack or a damage zone."""
@@ -42,49 +45,80 @@ FRONT_COS = math.cos(math.radians(40.0))
 specimen diagonally ahead, at 45 degrees, stays out)."""
 
 
+JOINED = ("element", "sub-simplices")
+"""How :class:`NodeGraph` joins nodes: all nodes of one element, or the edges of the element's
+sub-simplices (P1: the mesh edges; P2: each mesh edge in two halves and the edges between the
+midpoints of one element, its 4 or 8 sub-simplices)."""
+
+
 class NodeGraph:
-    """The Lagrange nodes of a P1/P2 space as a graph: two nodes are joined when they belong
-    to one element (for P2 the edge midpoints too).
+    """The Lagrange nodes of a P1/P2 space as a graph.
 
     Parameters
     ----------
     mesh : ngsolve.Mesh
     nodes : ngfrac.solve.nodal.LagrangeNodes
         The nodes of z on ``mesh`` (vertices, then edge midpoints).
+    joined : {"element", "sub-simplices"}
+        Which nodes are neighbours (:data:`JOINED`). The crack set (:func:`find_crack`) uses
+        "element"; branch counting (:func:`ngfrac.post.branching.crack_topology_of`)
+        "sub-simplices". For P1 the two are the mesh edges.
+
+    Attributes
+    ----------
+    points : (n, d) array
+        The node coordinates.
+    edges : (m, 2) int array
+        Each pair of neighbours once, the smaller number first, in lexicographic order.
+    graph : (n, n) scipy.sparse.csr_matrix
+        Symmetric, weighted by edge length. The weights are built from one entry per element
+        and pair, and entries of one orientation add up: an edge that two elements list in the
+        same order weighs twice its length (kept so that the crack sets stay as they were).
+    dim : int
+        The mesh dimension.
     """
 
-    def __init__(self, mesh: ngs.Mesh, nodes) -> None:
+    def __init__(self, mesh: ngs.Mesh, nodes: LagrangeNodes, joined: str = "element") -> None:
+        if joined not in JOINED:
+            raise ValueError(f"joined = {joined!r}: must be one of {JOINED}")
         self.points = np.asarray(nodes.points, dtype=float)
-        elements = (mesh.ngmesh.Elements2D() if mesh.dim == 2 else mesh.ngmesh.Elements3D()).NumPy()
-        corners = elements["nodes"][:, : mesh.dim + 1].astype(np.int64) - 1  # netgen counts from 1
-        local = [corners[:, i] for i in range(mesh.dim + 1)]
-        if nodes.order == 2:
-            nv = mesh.nv
-            pairs = np.sort(np.asarray(nodes.edge_vertices, dtype=np.int64), axis=1)
-            keys = pairs[:, 0] * nv + pairs[:, 1]
-            order = np.argsort(keys)
-            for i in range(mesh.dim + 1):
-                for j in range(i + 1, mesh.dim + 1):
-                    a, b = np.minimum(corners[:, i], corners[:, j]), np.maximum(corners[:, i], corners[:, j])
-                    position = order[np.searchsorted(keys, a * nv + b, sorter=order)]
-                    local.append(nv + position)
-        local = np.column_stack(local)
-        rows, cols = [], []
-        for i in range(local.shape[1]):
-            for j in range(i + 1, local.shape[1]):
-                rows.append(local[:, i])
-                cols.append(local[:, j])
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        rows, cols = _joined_pairs(mesh, nodes, joined)
+        self.edges = np.unique(np.sort(np.column_stack([rows, cols]), axis=1), axis=0)
         n = len(self.points)
         lengths = np.linalg.norm(self.points[rows] - self.points[cols], axis=1)
         graph = sparse.coo_matrix((lengths, (rows, cols)), shape=(n, n)).tocsr()
-        graph = graph.maximum(graph.T)  # symmetric; an edge shared by elements counted once
+        graph = graph.maximum(graph.T)  # symmetric
         self.graph = graph.tocsr()
         self.dim = mesh.dim
 
     @property
     def n_nodes(self) -> int:
+        """The number of nodes."""
         return self.graph.shape[0]
+
+
+def _joined_pairs(mesh: ngs.Mesh, nodes: LagrangeNodes, joined: str) -> tuple[np.ndarray, np.ndarray]:
+    """The neighbour pairs (rows, cols) of :class:`NodeGraph`, one per element and pair
+    ("element") or per sub-simplex edge ("sub-simplices"), repeats included."""
+    corners = ElementGeometry.of(mesh).vertices
+    pairs = list(itertools.combinations(range(corners.shape[1]), 2))
+    if nodes.order == 2:
+        mids = nodes.nv + edge_numbers(nodes.edge_vertices, corners)
+    if joined == "element":
+        local = corners if nodes.order == 1 else np.column_stack([corners, mids])
+        columns = list(itertools.combinations(range(local.shape[1]), 2))
+        return (np.concatenate([local[:, i] for i, _ in columns]),
+                np.concatenate([local[:, j] for _, j in columns]))
+    if nodes.order == 1:
+        edges = np.concatenate([corners[:, [i, j]] for i, j in pairs])
+    else:
+        halves = np.concatenate([np.column_stack([nodes.edge_vertices[:, k], nodes.nv +
+                                                  np.arange(len(nodes.edge_vertices))])
+                                 for k in (0, 1)])
+        across = np.concatenate([mids[:, [i, j]] for i, j in
+                                 itertools.combinations(range(mids.shape[1]), 2)])
+        edges = np.concatenate([halves, across])
+    return edges[:, 0], edges[:, 1]
 
 
 @dataclass(frozen=True)
