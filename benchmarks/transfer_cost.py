@@ -15,53 +15,25 @@ from __future__ import annotations
 import sys
 import time
 
-import numpy as np
 import ngsolve as ngs
 
 from ngfrac.mesh.domains import build_mesh
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, enforce_crack_sizes
 from ngfrac.mesh.transfer import transfer, transfer_phase_field
-from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
-from ngfrac.scene import Geometry
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.testing.meshes import UNIT_SQUARE, crack_mesh, profile_field
 
-SQUARE = Geometry(width=1.0, height=1.0)
 EPS = 0.02
-CRACK = [[(0.0, 0.5), (0.5, 0.5)]]
 SMOOTH = 0.5 + 0.4 * ngs.sin(3 * ngs.x) * ngs.cos(2 * ngs.y)
-
-
-def profile_field(mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
-    """z = exp(-dist/eps) at the Lagrange nodes."""
-    fes = ngs.H1(mesh, order=order)
-    z = ngs.GridFunction(fes, "z")
-    nodes = LagrangeNodes(fes)
-    nodes.assign(z, optimal_profile(distance_to_polylines(nodes.points, CRACK), EPS))
-    return z
-
-
-def crack_mesh(start: ngs.Mesh, *, h_band: float, h_core: float, hmax: float, width: float,
-               order: int = 2) -> ngs.Mesh:
-    """h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
-    mesh = start
-    for _ in range(2):
-        geom = ElementGeometry.of(mesh)
-        band = distance_to_polylines(geom.centroids, CRACK) < width
-        sizes = enforce_crack_sizes(mesh, np.where(band, h_band, hmax),
-                                    z=profile_field(mesh, order), z_level=0.6, h_crack=h_core)
-        mesh = adapt_mesh(mesh, SQUARE, sizes, hmax=hmax, max_vertices=10**6)
-    return mesh
 
 
 def main(argv: list[str]) -> int:
     threads = int(argv[argv.index("--threads") + 1]) if "--threads" in argv else 1
     ngs.SetNumThreads(threads)
     scale = 2.0 if "--quick" in argv else 1.0
-    old = crack_mesh(build_mesh(SQUARE, 0.05), h_band=scale * EPS / 3, h_core=scale * EPS / 3,
-                     hmax=0.1, width=6 * EPS)
+    old = crack_mesh(build_mesh(UNIT_SQUARE, 0.05), h_band=scale * EPS / 3, h_core=scale * EPS / 3,
+                     hmax=0.1, width=6 * EPS, epsilon=EPS)
     new = crack_mesh(old, h_band=scale * 0.3 * EPS, h_core=scale * 0.3 * EPS, hmax=0.08,
-                     width=5 * EPS)
-    z = profile_field(old, 2)
+                     width=5 * EPS, epsilon=EPS)
+    z = profile_field(old, 2, EPS)
     u = ngs.GridFunction(ngs.H1(old, order=2))
     u.Set(SMOOTH)
     fes = ngs.H1(new, order=2)

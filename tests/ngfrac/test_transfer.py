@@ -1,18 +1,20 @@
 """Field transfer between meshes (ngfrac.mesh.transfer)."""
 from __future__ import annotations
 
+import functools
 import logging
 
 import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.physics.cracks import distance_to_polylines
 from ngfrac.mesh.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, enforce_crack_sizes
+from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh
 from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 from ngfrac.mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
+from ngfrac.testing import meshes
 
 SQUARE = Geometry(width=1.0, height=1.0)
 EPS = 0.02
@@ -27,26 +29,10 @@ def refined_copy(mesh: ngs.Mesh) -> ngs.Mesh:
     return ngs.Mesh(ngmesh.Copy())
 
 
-def profile_field(mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
-    """z = exp(-dist/eps) at the Lagrange nodes."""
-    fes = ngs.H1(mesh, order=order)
-    z = ngs.GridFunction(fes, "z")
-    nodes = LagrangeNodes(fes)
-    nodes.assign(z, optimal_profile(distance_to_polylines(nodes.points, CRACK), EPS))
-    return z
-
-
-def crack_mesh(start: ngs.Mesh, *, h_band: float, h_core: float, hmax: float, width: float,
-               order: int = 2) -> ngs.Mesh:
-    """h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
-    mesh = start
-    for _ in range(2):
-        geom = ElementGeometry.of(mesh)
-        band = distance_to_polylines(geom.centroids, CRACK) < width
-        sizes = enforce_crack_sizes(mesh, np.where(band, h_band, hmax),
-                                    z=profile_field(mesh, order), z_level=0.6, h_crack=h_core)
-        mesh = adapt_mesh(mesh, SQUARE, sizes, hmax=hmax, max_vertices=10**6)
-    return mesh
+profile_field = functools.partial(meshes.profile_field, epsilon=EPS, cracks=CRACK)
+"""z = exp(-dist/eps) at the Lagrange nodes."""
+crack_mesh = functools.partial(meshes.crack_mesh, epsilon=EPS, cracks=CRACK, geometry=SQUARE)
+"""h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
 
 
 @pytest.mark.parametrize("order", [1, 2])
