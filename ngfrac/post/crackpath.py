@@ -26,9 +26,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import ngsolve as ngs
+
+    from ..scene import Geometry, Scene
+    from ..solve.stepper import PhaseFieldStepper
 
 __all__ = ["CrackPath", "tip_and_direction", "ridge_path", "connected_part", "final_ridge",
            "crack_path_rows", "history_path", "fit_direction",
@@ -99,7 +105,7 @@ def _relative_degrees(vectors: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.degrees(np.arctan2(cross, dot))
 
 
-def ridge_path(mesh, z, origin: Sequence[float], reference: Sequence[float],
+def ridge_path(mesh: ngs.Mesh, z: Any, origin: Sequence[float], reference: Sequence[float],
                radii: Sequence[float], level: float = 0.5, half_opening: float = 150.0,
                n_angles: int = 721) -> CrackPath:
     """The ridge of z on arcs around the initial tip.
@@ -156,7 +162,7 @@ def connected_part(path: CrackPath, max_jump: float) -> CrackPath:
     return CrackPath(path.origin, path.reference, points[:end])
 
 
-def final_ridge(scene, mesh, z, level: float = 0.5) -> CrackPath | None:
+def final_ridge(scene: Scene, mesh: ngs.Mesh, z: Any, level: float = 0.5) -> CrackPath | None:
     """The ridge of z beyond the first initial crack's tip, as one connected polyline (2D).
 
     Arcs every epsilon/2 from 2 epsilon (inside that the initial band's flanks reach
@@ -278,7 +284,7 @@ def mts_kink_angle(k1: float, k2: float) -> float:
     return math.degrees(2 * math.atan((k1 - math.sqrt(k1 * k1 + 8 * k2 * k2)) / (4 * k2)))
 
 
-def measure_kink(stepper, rmin: float, rmax: float, n_radii: int = 25,
+def measure_kink(stepper: PhaseFieldStepper, rmin: float, rmax: float, n_radii: int = 25,
                  level: float = 0.5) -> tuple[float, CrackPath]:
     """The kink angle of a stepper's current crack from the ridge of z.
 
@@ -301,8 +307,8 @@ def deviation_from_line(path: CrackPath, angle: float) -> np.ndarray:
     return direction[0] * offsets[:, 1] - direction[1] * offsets[:, 0]
 
 
-def slit_mesh(geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
-              opening: float = 1e-6):
+def slit_mesh(geometry: Geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
+              opening: float = 1e-6) -> ngs.Mesh:
     """A mesh of the rectangle with a straight crack from its left edge cut open.
 
     The faces (boundary ``crack``) meet at the tip and are ``2 opening`` apart at the mouth, a
@@ -368,7 +374,7 @@ class SharpCrack:
         return mts_kink_angle(self.K_I, self.K_II)
 
 
-def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
+def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
                          fit_range: tuple[float, float] = (0.005, 0.05)) -> SharpCrack:
     """Linear elasticity (no phase field) with the scene's loads at time ``t`` on
     :func:`slit_mesh`; plane strain or plane stress.
@@ -439,7 +445,7 @@ def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1
     return SharpCrack(K_I=k1, K_II=k2, G=float(G), energy=float(energy), reactions=reactions)
 
 
-def griffith_onset(scene, force: str, h_core: float | None = None) -> dict[str, float]:
+def griffith_onset(scene: Scene, force: str, h_core: float | None = None) -> dict[str, float]:
     """Where the scene's sharp crack starts to grow by Griffith: t_c with G(t_c) = gamma.
 
     For loads linear in t, ``G(t) = G1 t^2`` and the reaction ``F(t) = F1 t`` (G1, F1 from

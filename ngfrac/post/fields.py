@@ -85,8 +85,7 @@ def degraded_stress(model: Any, split: EnergySplit | None, crack_model: CrackMod
 
 def split_stresses(split: EnergySplit, e: Any) -> tuple[Any, Any]:
     """sigma+ = dpsi+/de and sigma- = dpsi-/de of a split at the strain e (dim x dim), in
-    closed form (NGSolve's symbolic ``Diff`` of the 3D spectral density gave the same values
-    but took 360 s to write one VTK snapshot of 297 tetrahedra).
+    closed form (why not NGSolve's ``Diff``: docs/user-guide.md, "Cost of the split stresses").
 
     Amor: ``sigma+ = K <tr e>_+ I + 2 mu dev e``, ``sigma- = K <tr e>_- I``. Miehe:
     ``sigma+ = lam <tr e>_+ I + 2 mu <e>_+`` with ``<e>_+ = sum_i <e_i>_+ P_i`` (the
@@ -151,10 +150,8 @@ def principal_stresses(stress: Any, dim: int) -> Any:
 def projected(stress: Any, mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
     """A 3x3 stress as its L2 projection per element, of polynomial order ``order``.
 
-    Used for the 3D spectral split: NGSolve rewrites the entries of its closed-form stress
-    (picking entry (i, j) of a product of matrices becomes a sum of products, recursively), so
-    von Mises and the principal values of it cost ~1 s per point (a snapshot of 297
-    tetrahedra took 109 s); evaluated once per point into a GridFunction they cost ~30 us.
+    Used for the 3D spectral split, whose closed-form stress is slow to evaluate entry by
+    entry (docs/user-guide.md, "Cost of the split stresses").
     """
     gf = ngs.GridFunction(ngs.MatrixValued(ngs.L2(mesh, order=order), dim=3), "stress")
     gf.Set(stress)
