@@ -261,16 +261,8 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         return not_grown(none)
     sub = graph.graph[cracked][:, cracked]
     n_components, labels = csgraph.connected_components(sub, directed=False)
-    if cracks:
-        distance = distance_to_cracks(points[cracked], cracks)
-        # the nodes on the initial cracks (they are mesh edges/faces; on a mesh that does not
-        # follow them, the nodes within half an element of them)
-        scale = float(np.ptp(points, axis=0).max())
-        seeds = distance <= max(1e-9 * scale, float(distance.min()) + 0.5 * float(np.median(sub.data)))
-    elif nucleus is not None:
-        nearest = int(np.argmin(np.linalg.norm(points[cracked] - np.asarray(nucleus)[:dim], axis=1)))
-        seeds = np.arange(len(cracked)) == nearest
-    else:
+    seeds = _seeds(points, cracked, sub, cracks, nucleus)
+    if seeds is None:
         return not_grown(none, n_zones=n_components)
     crack_labels = np.unique(labels[seeds])
     in_crack = np.isin(labels, crack_labels)
@@ -288,23 +280,12 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     n_zones = n_components - len(crack_labels)
     ridge_grown = len(ridge_s) > 0 and ridge_s[-1] > band
     not_grown_tip = start if start is not None else (ridge_points[-1] if len(ridge_s) else none)
-    if dim == 2 and ridge_grown:
-        # the ridge's end and the direction there, from the ridge nodes near it and a little
-        # behind it (where z is nearly flat across a wide front, single nodes and the
-        # gradient of s scatter across the band)
-        end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
-        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
-        heading = end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[ridge][order][-1]
-    elif dim == 2 and cracks and start is not None:
-        # a crack that grew as a diffuse zone (z falls along it as fast as across, so no node
-        # ahead of the initial band passes the ridge test): its front from the initial tip,
-        # in the direction of the first crack's last segment
-        end = start
-        heading = np.asarray(cracks[0][-1], dtype=float) - np.asarray(cracks[0][-2], dtype=float)
-    elif ridge_grown:  # 3D: the most advanced node of the crack set
-        end, heading = ridge_points[-1], None
-    else:
+    ridge_direction = None if direction is None else direction[ridge][order]
+    end_heading = _end_and_heading(ridge_points, ridge_s, ridge_direction, ridge_grown, cracks,
+                                   start, bin_width)
+    if end_heading is None:
         return not_grown(not_grown_tip, ridge_points, ridge_s, n_zones, len(members))
+    end, heading = end_heading
     tip = end
     if heading is not None and np.linalg.norm(heading) > 0:
         tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
@@ -320,6 +301,48 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
                        origin, bin_width)
     length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
     return CrackSet(tip, ridge_points, ridge_s, path, length, n_zones, len(members))
+
+
+def _seeds(points: np.ndarray, cracked: np.ndarray, sub: sparse.csr_matrix,
+           cracks: Sequence[Sequence[Sequence[float]]], nucleus: np.ndarray | None) -> np.ndarray | None:
+    """Mask over the ``cracked`` nodes of those the crack set grows from: the nodes on the
+    initial cracks or, with none, the one nearest to ``nucleus``; None without either."""
+    if cracks:
+        distance = distance_to_cracks(points[cracked], cracks)
+        # the nodes on the initial cracks (they are mesh edges/faces; on a mesh that does not
+        # follow them, the nodes within half an element of them)
+        scale = float(np.ptp(points, axis=0).max())
+        return distance <= max(1e-9 * scale, float(distance.min()) + 0.5 * float(np.median(sub.data)))
+    if nucleus is not None:
+        dim = points.shape[1]
+        nearest = int(np.argmin(np.linalg.norm(points[cracked] - np.asarray(nucleus)[:dim], axis=1)))
+        return np.arange(len(cracked)) == nearest
+    return None
+
+
+def _end_and_heading(ridge_points: np.ndarray, ridge_s: np.ndarray, direction: np.ndarray | None,
+                     ridge_grown: bool, cracks: Sequence[Sequence[Sequence[float]]],
+                     start: np.ndarray | None, bin_width: float
+                     ) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """Where the front search starts and the direction of growth there (None in 3D); None
+    when the crack has not grown. ``direction``: the growth direction at the ridge points
+    (2D), None in 3D."""
+    dim = ridge_points.shape[1]
+    if dim == 2 and ridge_grown:
+        # the ridge's end and the direction there, from the ridge nodes near it and a little
+        # behind it (where z is nearly flat across a wide front, single nodes and the
+        # gradient of s scatter across the band)
+        end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
+        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
+        return end, end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[-1]
+    if dim == 2 and cracks and start is not None:
+        # a crack that grew as a diffuse zone (z falls along it as fast as across, so no node
+        # ahead of the initial band passes the ridge test): its front from the initial tip,
+        # in the direction of the first crack's last segment
+        return start, np.asarray(cracks[0][-1], dtype=float) - np.asarray(cracks[0][-2], dtype=float)
+    if ridge_grown:  # 3D: the most advanced node of the crack set
+        return ridge_points[-1], None
+    return None
 
 
 def _front(points: np.ndarray, s: np.ndarray, ridge_end: np.ndarray, direction: np.ndarray,
