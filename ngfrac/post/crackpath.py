@@ -374,6 +374,26 @@ class SharpCrack:
         return mts_kink_angle(self.K_I, self.K_II)
 
 
+def _residual_forces(model: Any, fes: Any, loads: Sequence[Any], residual: Any,
+                     free: np.ndarray) -> dict[str, float]:
+    """``F<c>_<boundary>``: the residual tested with the indicator of each loaded boundary's
+    fixed component (0 for a free component)."""
+    import ngsolve as ngs
+
+    mesh = fes.mesh
+    reactions = {}
+    for load in loads:
+        for i, (c, is_free) in enumerate(zip(model.component_names, load.free)):
+            if is_free:
+                reactions[f"F{c}_{load.boundary}"] = 0.0
+                continue
+            w = ngs.GridFunction(fes)
+            w.components[i].Set(1.0, ngs.BND, definedon=mesh.Boundaries(load.boundary))
+            w.vec.FV().NumPy()[free] = 0.0
+            reactions[f"F{c}_{load.boundary}"] = float(ngs.InnerProduct(residual, w.vec))
+    return reactions
+
+
 def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
                          fit_range: tuple[float, float] = (0.005, 0.05)) -> SharpCrack:
     """Linear elasticity (no phase field) with the scene's loads at time ``t`` on
@@ -412,16 +432,7 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
         residual = (-a.mat * gfu.vec).Evaluate()
         gfu.vec.data += a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky") * residual
         residual.data = a.mat * gfu.vec
-    reactions = {}
-    for load in scene.loads:
-        for i, (c, is_free) in enumerate(zip(model.component_names, load.free)):
-            if is_free:
-                reactions[f"F{c}_{load.boundary}"] = 0.0
-                continue
-            w = ngs.GridFunction(fes)
-            w.components[i].Set(1.0, ngs.BND, definedon=mesh.Boundaries(load.boundary))
-            w.vec.FV().NumPy()[free] = 0.0
-            reactions[f"F{c}_{load.boundary}"] = float(ngs.InnerProduct(residual, w.vec))
+    reactions = _residual_forces(model, fes, scene.loads, residual, free)
     energy = 0.5 * ngs.Integrate(model.energy_density(gfu), mesh, order=2 * order)
     mouth, tip = np.asarray(crack[0], dtype=float), np.asarray(crack[-1], dtype=float)
     tangent = (tip - mouth) / np.linalg.norm(tip - mouth)
