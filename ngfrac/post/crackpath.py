@@ -169,6 +169,12 @@ def final_ridge(scene: Scene, mesh: ngs.Mesh, z: Any, level: float = 0.5) -> Cra
     z = 1/2 on the arcs) to the farthest corner of the domain (:func:`ridge_path`), cut at the
     first jump longer than 2 epsilon + the arc spacing (:func:`connected_part`). None for 3D
     scenes and scenes without an initial crack.
+
+    See Also
+    --------
+    ngfrac.post.crackset.CrackSet : its ``path`` is the grown crack read from the node graph
+        (the ridge test), which gives ``grown_length``; this arc ridge is what
+        ``crack_path.csv`` holds. The two measure the same path in two ways.
     """
     if scene.geometry.dim != 2 or not scene.cracks:
         return None

@@ -136,7 +136,8 @@ class CrackSet:
         Their distance along the crack from the initial crack.
     path : (k, d) array
         The grown crack as a polyline from ``start`` along the ridge to the tip (its points
-        about ``bin_width`` apart; just ``start`` while not grown).
+        about ``bin_width`` apart; just ``start`` while not grown). The arcs of
+        :func:`ngfrac.post.crackpath.final_ridge` measure the same path another way.
     grown_length : float
         Length of ``path`` (0 while not grown).
     n_damage_zones : int
