@@ -83,7 +83,7 @@ def tip_and_direction(polyline: Sequence[Sequence[float]]) -> tuple[np.ndarray, 
 
     Parameters
     ----------
-    polyline : (n, 2) points
+    polyline : sequence of (x, y)
         An initial crack, written from the mouth to the tip.
 
     Returns

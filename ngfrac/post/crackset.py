@@ -54,6 +54,13 @@ midpoints of one element, its 4 or 8 sub-simplices)."""
 class NodeGraph:
     """The Lagrange nodes of a P1/P2 space as a graph.
 
+    ``points`` (n, d) are the node coordinates; ``edges`` (m, 2) each pair of neighbours
+    once, the smaller number first, in lexicographic order; ``graph`` the symmetric (n, n)
+    CSR matrix weighted by edge length, and ``dim`` the mesh dimension. The weights are built
+    from one entry per element and pair, and entries of one orientation add up: an edge that
+    two elements list in the same order weighs twice its length (kept so that the crack sets
+    stay as they were).
+
     Parameters
     ----------
     mesh : ngsolve.Mesh
@@ -64,18 +71,6 @@ class NodeGraph:
         "element"; branch counting (:func:`ngfrac.post.branching.crack_topology_of`)
         "sub-simplices". For P1 the two are the mesh edges.
 
-    Attributes
-    ----------
-    points : (n, d) array
-        The node coordinates.
-    edges : (m, 2) int array
-        Each pair of neighbours once, the smaller number first, in lexicographic order.
-    graph : (n, n) scipy.sparse.csr_matrix
-        Symmetric, weighted by edge length. The weights are built from one entry per element
-        and pair, and entries of one orientation add up: an edge that two elements list in the
-        same order weighs twice its length (kept so that the crack sets stay as they were).
-    dim : int
-        The mesh dimension.
     """
 
     def __init__(self, mesh: ngs.Mesh, nodes: LagrangeNodes, joined: str = "element") -> None:

@@ -124,7 +124,7 @@ class StabilityMonitor:
     z_decrease: float = 0.0
     """Largest decrease of z at a node from one step to the next on an unchanged mesh."""
     energy_rise: float = -math.inf
-    """Largest (E_k - E_{k-1}) / |E_{k-1}| over held-load steps on an unchanged mesh."""
+    """Largest ``(E_k - E_{k-1}) / |E_{k-1}|`` over held-load steps on an unchanged mesh."""
     held_steps: int = 0
     first_nonfinite: int | None = None
     max_nv: int = 0
@@ -327,7 +327,7 @@ def check_cap(limit: int) -> Callable[[CaseResult], list[str]]:
 
 
 def cracked_annulus(stepper: PhaseFieldStepper) -> None:
-    """z = 1 on the annulus 0.12 <= |x - (0.65, 0.5)| <= 0.25 (14% of the plate), with the
+    """z = 1 on the annulus ``0.12 <= |x - (0.65, 0.5)| <= 0.25`` (14% of the plate), with the
     optimal profile outside: the island inside is held by the residual stiffness alone."""
     points = stepper.nodes.points
     r = np.hypot(points[:, 0] - 0.65, points[:, 1] - 0.5)
