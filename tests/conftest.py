@@ -1,4 +1,10 @@
-"""Shared pytest options: ``--runslow`` enables studies marked ``slow``."""
+"""Shared pytest options: ``--runslow`` enables studies marked ``slow``.
+
+tests/ is a package (tests/__init__.py), so pytest puts the checkout on sys.path, not tests/:
+with tests/ there, the folders tests/ngfrac and tests/estimators shadowed the ngfrac and
+estimators packages as namespace packages (``pytest`` run from an installed entry point then
+imported the installed checkout's ngfrac, whatever the working tree). Shared scenes are in
+:mod:`ngfrac.testing`."""
 import pytest
 
 
