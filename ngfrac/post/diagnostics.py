@@ -23,6 +23,7 @@ class Energies:
 
     @property
     def E_total(self) -> float:
+        """``E_el + E_surf - work``."""
         return self.E_el + self.E_surf - self.work
 
 

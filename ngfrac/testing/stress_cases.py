@@ -176,6 +176,8 @@ class StabilityMonitor:
 # -- the cases ----------------------------------------------------------------------------
 @dataclass(frozen=True)
 class CaseResult:
+    """A finished case: its scene, stepper and monitor, and the wall time of the run."""
+
     case: "StressCase"
     scene: Scene
     stepper: PhaseFieldStepper
@@ -184,16 +186,20 @@ class CaseResult:
 
     @property
     def records(self) -> list:
+        """Every record, the initial state first."""
         return self.monitor.records
 
     @property
     def steps(self) -> int:
+        """The number of steps run."""
         return self.records[-1].step
 
     def last(self, name: str) -> float:
+        """A field of the last record."""
         return getattr(self.records[-1], name)
 
     def series(self, name: str) -> np.ndarray:
+        """A field of every record as an array."""
         return np.array([getattr(r, name) for r in self.records], dtype=float)
 
 
@@ -250,6 +256,7 @@ def energy_problems(result: CaseResult) -> list[str]:
 
 
 def summary(result: CaseResult) -> str:
+    """One line on a finished case, for assertion messages."""
     m = result.monitor
     return (f"{result.case.name}: {result.steps} steps in {result.wall_s:.1f} s, "
             f"z outside [0,1] {m.z_outside:.2e}, z decrease {m.z_decrease:.2e}, "
@@ -270,6 +277,7 @@ def _expect(condition: bool, text: str) -> list[str]:
 
 
 def check_crosses(result: CaseResult) -> list[str]:
+    """The tip reached x > 0.95: the crack crossed the plate."""
     tip = np.nanmax(result.series("tip_x"))
     return _expect(tip > 0.95, f"the crack did not cross the plate (tip_x max {tip:.3f})")
 
@@ -317,6 +325,8 @@ def check_no_healing(result: CaseResult) -> list[str]:
 
 
 def check_cap(limit: int) -> Callable[[CaseResult], list[str]]:
+    """The check of a capped adaptive run: at most ``limit`` vertices, at least three mesh
+    changes, and the crack crossed the plate."""
     def check(result: CaseResult) -> list[str]:
         found = _expect(result.monitor.max_nv <= limit,
                         f"{result.monitor.max_nv} vertices, above the cap {limit}")
@@ -467,6 +477,7 @@ FAILURE_SCENE = ("output.checkpoint_every=2", "time.dt=1e-3", "time.t_end=0.01")
 
 
 def failure_scene() -> Scene:
+    """The slit, ramped and held, ten steps with a checkpoint every two."""
     return slit(*mode3_load(RAMP_HOLD), *FAILURE_SCENE)
 
 
@@ -503,6 +514,9 @@ def poison(sub_step: str) -> tuple[str, Callable]:
 
 @dataclass(frozen=True)
 class FailureResult:
+    """What :func:`run_failure` saw: the error, the checkpoint's step, the restart's last
+    step and whether it matched the uninterrupted run, and the wall time."""
+
     error: SolverError | None
     checkpoint_step: int | None
     restarted_step: int | None
