@@ -2,7 +2,7 @@
 
     python benchmarks/stress_table.py [CASE ...] [--threads N]
 
-The cases live in tests/stress/stress_cases.py (the tests assert what this table reports).
+The cases live in ngfrac/testing/stress_cases.py (the tests assert what this table reports).
 Columns: steps; wall time (set-up, steps and checks; one NGSolve thread by default, so it
 depends on the machine and its load); epsilon over the smallest element (longest edge of the
 smallest element, over all steps); the largest violation of 0 <= z <= 1 at a node; the
@@ -16,44 +16,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-# ROOT first: tests/estimators (a folder of tests) must not hide the estimators package
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "stress"), str(ROOT / "tests")]
-
-import ngsolve as ngs  # noqa: E402
-import numpy as np  # noqa: E402
+import ngsolve as ngs
+import numpy as np
 import ngfrac
-from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
-
-import stress_cases as sc  # noqa: E402
+from ngfrac.solve.stepper import PhaseFieldStepper
+from ngfrac.testing import stress_cases as sc
 
 THREE_D = "three_d"
 """The 3D case of tests/stress/test_stress_3d.py (a unit cube pulled apart, P1)."""
-
-
-def run_three_d() -> tuple[sc.CaseResult, list[str]]:
-    """The 3D case as its test runs it: the box's load sampler in place of the rectangle's,
-    the monitor's checks and the test's physical ones (the cube damaged, a finite force)."""
-    import math
-
-    import test_stress_3d as t3
-    from ngfrac.scene import Scene
-
-    original = sc._load_sampler
-    sc._load_sampler = t3.box_load_sampler
-    try:
-        case = sc.StressCase(THREE_D, "unit cube pulled apart in y (E 50, nu 0.29, h 0.2), P1, ramp "
-                             "and hold", lambda: Scene.from_dict(t3.box_scene_data()), min_held=20)
-        result = sc.run_case(case)
-    finally:
-        sc._load_sampler = original
-    found = sc.problems(result)
-    last = result.records[-1]
-    if not last.crack_length > 0.01:
-        found.append(f"no damage: crack length {last.crack_length:.3g}")
-    if not (0 < last.forces["Fy_top"] < 2 * 50.0 * 0.1 and math.isfinite(last.E_total)):
-        found.append(f"force on the top {last.forces['Fy_top']:.3g} outside (0, 10)")
-    return result, found
 
 
 def _patch(name, function):
@@ -108,15 +78,11 @@ def main(argv: list[str]) -> int:
             print(f"| {name} | {what} | {sc.FAIL_AT} | {result.wall_s:.1f} | | | | | | "
                   f"{_verdict(found, [], wrong_step)} |", flush=True)
         else:
-            if name == THREE_D:
-                result, found = run_three_d()
-                description, slow, energy = result.case.description, False, []
-            else:
-                case = sc.CASE_BY_NAME[name]
-                result = sc.run_case(case)
-                found = sc.problems(result)
-                energy = sc.energy_problems(result) if case.energy_known else []
-                description, slow = case.description, case.slow
+            case = sc.BOX_3D if name == THREE_D else sc.CASE_BY_NAME[name]
+            result = sc.run_case(case)
+            found = sc.problems(result)
+            energy = sc.energy_problems(result) if case.energy_known else []
+            description, slow = case.description, case.slow
             m = result.monitor
             ratio = result.scene.phase_field.epsilon / np.nanmin(result.series("hmin"))
             print(f"| {name}{' (slow)' if slow else ''} | {description} | {result.steps} "

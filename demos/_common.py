@@ -11,7 +11,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene, run_scene
-from ngfrac.post.crackpath import CrackPath, history_path, initial_tip, kink_angle, measure_kink
+from ngfrac.post.crackpath import CrackPath, history_path, kink_angle, measure_kink, tip_and_direction
 from ngfrac.io.plotting import new_figure, read_history
 
 
@@ -79,7 +79,7 @@ def measure_kink_both_ways(stepper: PhaseFieldStepper, scene: Scene, history: di
     """The kink angle from the ridge of z between ``rmin`` and ``rmax`` from the initial tip,
     that ridge as a path, and the angle from the tip history (nan if too short)."""
     measured, path = measure_kink(stepper, rmin, rmax)
-    origin, reference = initial_tip(scene.cracks[0].points)
+    origin, reference = tip_and_direction(scene.cracks[0].points)
     track = history_path(history, origin, reference, max_jump=0.1)
     try:
         from_history = kink_angle(track, rmin, rmax)

@@ -34,7 +34,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ngfrac import PhaseFieldStepper, RunSummary, load_scene
-from ngfrac.post.crackpath import griffith_onset, history_path, initial_tip, measure_kink
+from ngfrac.post.crackpath import griffith_onset, history_path, measure_kink, tip_and_direction
 from ngfrac.io.plotting import read_history
 
 from _common import (command_line, plot_force_displacement, run_keeping_stepper,  # demos/_common.py
@@ -59,7 +59,7 @@ def main(out_dir: str | Path = "out/sens", overrides: Sequence[str] = (),
     plot_force_displacement(u, force, out / "force_displacement.png",
                             f"{scene.name}: epsilon = {eps:g} mm", ("F_x top", "u_x top"),
                             curve="phase field (no split)")
-    origin, reference = initial_tip(scene.cracks[0].points)
+    origin, reference = tip_and_direction(scene.cracks[0].points)
     try:
         angle, path = measure_kink(stepper, eps, 6 * eps)
     except ValueError:  # the crack has not grown 6 epsilon

@@ -172,7 +172,7 @@ def test_every_documented_file_is_written(written_files):
 # -- one meaning for output.vtk_every = 0 ------------------------------------------------------
 def test_vtk_every_zero_means_only_the_last_step(tmp_path):
     from ngfrac.runner import run_scene
-    from scenes import quick_slit
+    from ngfrac.testing.scenes import quick_slit
 
     row = next(r for r in table_rows(section("### `[output]`")) if r[0] == "vtk_every")
     assert "0: only the last step" in row[3]

@@ -14,7 +14,6 @@ point. A crack that closes a loop counts as a tree cut open somewhere (loops are
 """
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,10 +21,10 @@ import ngsolve as ngs
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from ..mesh.remesh import ElementGeometry, edge_numbers
 from ..solve.nodal import LagrangeNodes
+from .crackset import NodeGraph
 
-__all__ = ["CrackTopology", "crack_topology", "node_graph", "crack_topology_of"]
+__all__ = ["CrackTopology", "crack_topology", "crack_topology_of"]
 
 
 @dataclass(frozen=True)
@@ -53,29 +52,12 @@ class CrackTopology:
     lengths: list[float] = field(default_factory=list)
 
 
-def node_graph(nodes: LagrangeNodes, mesh: ngs.Mesh) -> np.ndarray:
-    """Edges (m, 2) between Lagrange nodes: the mesh edges (P1), or for P2 each mesh edge's
-    two halves and the edges joining the midpoints of one element (its 4 or 8 sub-simplices)."""
-    geom = ElementGeometry.of(mesh)
-    pairs = list(itertools.combinations(range(geom.vertices.shape[1]), 2))
-    if nodes.order == 1:
-        edges = np.concatenate([geom.vertices[:, [i, j]] for i, j in pairs])
-    else:
-        mids = nodes.nv + edge_numbers(nodes.edge_vertices, geom.vertices)
-        halves = np.concatenate([np.column_stack([nodes.edge_vertices[:, k], nodes.nv +
-                                                  np.arange(len(nodes.edge_vertices))])
-                                 for k in (0, 1)])
-        across = np.concatenate([mids[:, [i, j]] for i, j in
-                                 itertools.combinations(range(mids.shape[1]), 2)])
-        edges = np.concatenate([halves, across])
-    return np.unique(np.sort(edges, axis=1), axis=0)
-
-
 def crack_topology_of(z: ngs.GridFunction, *, spacing: float, level: float = 0.5,
                       min_length: float | None = None) -> CrackTopology:
     """:func:`crack_topology` of a P1/P2 GridFunction at its Lagrange nodes."""
     nodes = LagrangeNodes(z.space)
-    return crack_topology(nodes.points, node_graph(nodes, z.space.mesh), nodes.values(z),
+    edges = NodeGraph(z.space.mesh, nodes, joined="sub-simplices").edges
+    return crack_topology(nodes.points, edges, nodes.values(z),
                           spacing=spacing, level=level, min_length=min_length)
 
 
@@ -88,7 +70,7 @@ def crack_topology(points: np.ndarray, edges: np.ndarray, z: np.ndarray, *, spac
     points : (n, d) array
         Node coordinates.
     edges : (m, 2) int array
-        Node pairs joined by a mesh edge (:func:`node_graph`).
+        Node pairs joined by a mesh edge (``NodeGraph(mesh, nodes, joined="sub-simplices").edges``).
     z : (n,) array
         Phase field at the nodes.
     spacing : float

@@ -26,11 +26,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["CrackPath", "initial_tip", "ridge_path", "connected_part", "final_ridge",
+if TYPE_CHECKING:
+    import ngsolve as ngs
+
+    from ..scene import Geometry, Scene
+    from ..solve.stepper import PhaseFieldStepper
+
+__all__ = ["CrackPath", "tip_and_direction", "ridge_path", "connected_part", "final_ridge",
            "crack_path_rows", "history_path", "fit_direction",
            "kink_angle", "stress_intensity_from_jump", "mts_kink_angle", "measure_kink",
            "deviation_from_line", "slit_mesh", "SharpCrack", "sharp_crack_solution",
@@ -72,8 +78,21 @@ class CrackPath:
         return "\n".join(rows)
 
 
-def initial_tip(polyline: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
-    """The tip of an initial crack polyline (written mouth to tip) and its unit direction."""
+def tip_and_direction(polyline: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """The tip of a 2D crack polyline and the unit direction of its last segment.
+
+    Parameters
+    ----------
+    polyline : sequence of (x, y)
+        An initial crack, written from the mouth to the tip.
+
+    Returns
+    -------
+    tip, direction : numpy.ndarray
+        The last point (as :func:`ngfrac.physics.cracks.initial_tip` in 2D) and the unit
+        vector from the last but one point to it: the ``origin`` and ``reference`` of a
+        :class:`CrackPath`.
+    """
     points = np.asarray(polyline, dtype=float)
     direction = points[-1] - points[-2]
     return points[-1], direction / np.linalg.norm(direction)
@@ -86,7 +105,7 @@ def _relative_degrees(vectors: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.degrees(np.arctan2(cross, dot))
 
 
-def ridge_path(mesh, z, origin: Sequence[float], reference: Sequence[float],
+def ridge_path(mesh: ngs.Mesh, z: Any, origin: Sequence[float], reference: Sequence[float],
                radii: Sequence[float], level: float = 0.5, half_opening: float = 150.0,
                n_angles: int = 721) -> CrackPath:
     """The ridge of z on arcs around the initial tip.
@@ -143,18 +162,24 @@ def connected_part(path: CrackPath, max_jump: float) -> CrackPath:
     return CrackPath(path.origin, path.reference, points[:end])
 
 
-def final_ridge(scene, mesh, z, level: float = 0.5) -> CrackPath | None:
+def final_ridge(scene: Scene, mesh: ngs.Mesh, z: Any, level: float = 0.5) -> CrackPath | None:
     """The ridge of z beyond the first initial crack's tip, as one connected polyline (2D).
 
     Arcs every epsilon/2 from 2 epsilon (inside that the initial band's flanks reach
     z = 1/2 on the arcs) to the farthest corner of the domain (:func:`ridge_path`), cut at the
     first jump longer than 2 epsilon + the arc spacing (:func:`connected_part`). None for 3D
     scenes and scenes without an initial crack.
+
+    See Also
+    --------
+    ngfrac.post.crackset.CrackSet : its ``path`` is the grown crack read from the node graph
+        (the ridge test), which gives ``grown_length``; this arc ridge is what
+        ``crack_path.csv`` holds. The two measure the same path in two ways.
     """
     if scene.geometry.dim != 2 or not scene.cracks:
         return None
     eps = scene.phase_field.epsilon
-    origin, reference = initial_tip(scene.cracks[0].points)
+    origin, reference = tip_and_direction(scene.cracks[0].points)
     g = scene.geometry
     corners = np.array([[x, y] for x in (g.origin[0], g.origin[0] + g.width)
                         for y in (g.origin[1], g.origin[1] + g.height)])
@@ -265,14 +290,14 @@ def mts_kink_angle(k1: float, k2: float) -> float:
     return math.degrees(2 * math.atan((k1 - math.sqrt(k1 * k1 + 8 * k2 * k2)) / (4 * k2)))
 
 
-def measure_kink(stepper, rmin: float, rmax: float, n_radii: int = 25,
+def measure_kink(stepper: PhaseFieldStepper, rmin: float, rmax: float, n_radii: int = 25,
                  level: float = 0.5) -> tuple[float, CrackPath]:
     """The kink angle of a stepper's current crack from the ridge of z.
 
     Uses the first initial crack of the scene; arcs at ``n_radii`` radii from ``rmin`` to
     ``rmax``. Returns the angle in degrees and the ridge path.
     """
-    origin, reference = initial_tip(stepper.scene.cracks[0].points)
+    origin, reference = tip_and_direction(stepper.scene.cracks[0].points)
     path = ridge_path(stepper.mesh, stepper.z, origin, reference,
                       np.linspace(rmin, rmax, n_radii), level=level)
     return kink_angle(path, rmin, rmax), path
@@ -288,8 +313,8 @@ def deviation_from_line(path: CrackPath, angle: float) -> np.ndarray:
     return direction[0] * offsets[:, 1] - direction[1] * offsets[:, 0]
 
 
-def slit_mesh(geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
-              opening: float = 1e-6):
+def slit_mesh(geometry: Geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
+              opening: float = 1e-6) -> ngs.Mesh:
     """A mesh of the rectangle with a straight crack from its left edge cut open.
 
     The faces (boundary ``crack``) meet at the tip and are ``2 opening`` apart at the mouth, a
@@ -355,7 +380,27 @@ class SharpCrack:
         return mts_kink_angle(self.K_I, self.K_II)
 
 
-def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
+def _residual_forces(model: Any, fes: Any, loads: Sequence[Any], residual: Any,
+                     free: np.ndarray) -> dict[str, float]:
+    """``F<c>_<boundary>``: the residual tested with the indicator of each loaded boundary's
+    fixed component (0 for a free component)."""
+    import ngsolve as ngs
+
+    mesh = fes.mesh
+    reactions = {}
+    for load in loads:
+        for i, (c, is_free) in enumerate(zip(model.component_names, load.free)):
+            if is_free:
+                reactions[f"F{c}_{load.boundary}"] = 0.0
+                continue
+            w = ngs.GridFunction(fes)
+            w.components[i].Set(1.0, ngs.BND, definedon=mesh.Boundaries(load.boundary))
+            w.vec.FV().NumPy()[free] = 0.0
+            reactions[f"F{c}_{load.boundary}"] = float(ngs.InnerProduct(residual, w.vec))
+    return reactions
+
+
+def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
                          fit_range: tuple[float, float] = (0.005, 0.05)) -> SharpCrack:
     """Linear elasticity (no phase field) with the scene's loads at time ``t`` on
     :func:`slit_mesh`; plane strain or plane stress.
@@ -393,16 +438,7 @@ def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1
         residual = (-a.mat * gfu.vec).Evaluate()
         gfu.vec.data += a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky") * residual
         residual.data = a.mat * gfu.vec
-    reactions = {}
-    for load in scene.loads:
-        for i, (c, is_free) in enumerate(zip(model.component_names, load.free)):
-            if is_free:
-                reactions[f"F{c}_{load.boundary}"] = 0.0
-                continue
-            w = ngs.GridFunction(fes)
-            w.components[i].Set(1.0, ngs.BND, definedon=mesh.Boundaries(load.boundary))
-            w.vec.FV().NumPy()[free] = 0.0
-            reactions[f"F{c}_{load.boundary}"] = float(ngs.InnerProduct(residual, w.vec))
+    reactions = _residual_forces(model, fes, scene.loads, residual, free)
     energy = 0.5 * ngs.Integrate(model.energy_density(gfu), mesh, order=2 * order)
     mouth, tip = np.asarray(crack[0], dtype=float), np.asarray(crack[-1], dtype=float)
     tangent = (tip - mouth) / np.linalg.norm(tip - mouth)
@@ -426,7 +462,7 @@ def sharp_crack_solution(scene, t: float = 1.0, order: int = 3, h_tip: float = 1
     return SharpCrack(K_I=k1, K_II=k2, G=float(G), energy=float(energy), reactions=reactions)
 
 
-def griffith_onset(scene, force: str, h_core: float | None = None) -> dict[str, float]:
+def griffith_onset(scene: Scene, force: str, h_core: float | None = None) -> dict[str, float]:
     """Where the scene's sharp crack starts to grow by Griffith: t_c with G(t_c) = gamma.
 
     For loads linear in t, ``G(t) = G1 t^2`` and the reaction ``F(t) = F1 t`` (G1, F1 from

@@ -19,6 +19,7 @@ most advanced point of the front), without the ridge test, which needs a 1D crac
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -28,9 +29,11 @@ import ngsolve as ngs
 from scipy import sparse
 from scipy.sparse import csgraph
 
+from ..mesh.remesh import ElementGeometry, edge_numbers
 from ..physics.cracks import distance_to_cracks
+from ..solve.nodal import LagrangeNodes
 
-__all__ = ["CrackSet", "NodeGraph", "find_crack"]
+__all__ = ["CrackSet", "JOINED", "NodeGraph", "find_crack"]
 
 THRESHOLD = 0.5
 """z at and above which a node belongs to a crack or a damage zone."""
@@ -42,49 +45,75 @@ FRONT_COS = math.cos(math.radians(40.0))
 specimen diagonally ahead, at 45 degrees, stays out)."""
 
 
+JOINED = ("element", "sub-simplices")
+"""How :class:`NodeGraph` joins nodes: all nodes of one element, or the edges of the element's
+sub-simplices (P1: the mesh edges; P2: each mesh edge in two halves and the edges between the
+midpoints of one element, its 4 or 8 sub-simplices)."""
+
+
 class NodeGraph:
-    """The Lagrange nodes of a P1/P2 space as a graph: two nodes are joined when they belong
-    to one element (for P2 the edge midpoints too).
+    """The Lagrange nodes of a P1/P2 space as a graph.
+
+    ``points`` (n, d) are the node coordinates; ``edges`` (m, 2) each pair of neighbours
+    once, the smaller number first, in lexicographic order; ``graph`` the symmetric (n, n)
+    CSR matrix weighted by edge length, and ``dim`` the mesh dimension. The weights are built
+    from one entry per element and pair, and entries of one orientation add up: an edge that
+    two elements list in the same order weighs twice its length (kept so that the crack sets
+    stay as they were).
 
     Parameters
     ----------
     mesh : ngsolve.Mesh
     nodes : ngfrac.solve.nodal.LagrangeNodes
         The nodes of z on ``mesh`` (vertices, then edge midpoints).
+    joined : {"element", "sub-simplices"}
+        Which nodes are neighbours (:data:`JOINED`). The crack set (:func:`find_crack`) uses
+        "element"; branch counting (:func:`ngfrac.post.branching.crack_topology_of`)
+        "sub-simplices". For P1 the two are the mesh edges.
+
     """
 
-    def __init__(self, mesh: ngs.Mesh, nodes) -> None:
+    def __init__(self, mesh: ngs.Mesh, nodes: LagrangeNodes, joined: str = "element") -> None:
+        if joined not in JOINED:
+            raise ValueError(f"joined = {joined!r}: must be one of {JOINED}")
         self.points = np.asarray(nodes.points, dtype=float)
-        elements = (mesh.ngmesh.Elements2D() if mesh.dim == 2 else mesh.ngmesh.Elements3D()).NumPy()
-        corners = elements["nodes"][:, : mesh.dim + 1].astype(np.int64) - 1  # netgen counts from 1
-        local = [corners[:, i] for i in range(mesh.dim + 1)]
-        if nodes.order == 2:
-            nv = mesh.nv
-            pairs = np.sort(np.asarray(nodes.edge_vertices, dtype=np.int64), axis=1)
-            keys = pairs[:, 0] * nv + pairs[:, 1]
-            order = np.argsort(keys)
-            for i in range(mesh.dim + 1):
-                for j in range(i + 1, mesh.dim + 1):
-                    a, b = np.minimum(corners[:, i], corners[:, j]), np.maximum(corners[:, i], corners[:, j])
-                    position = order[np.searchsorted(keys, a * nv + b, sorter=order)]
-                    local.append(nv + position)
-        local = np.column_stack(local)
-        rows, cols = [], []
-        for i in range(local.shape[1]):
-            for j in range(i + 1, local.shape[1]):
-                rows.append(local[:, i])
-                cols.append(local[:, j])
-        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        rows, cols = _joined_pairs(mesh, nodes, joined)
+        self.edges = np.unique(np.sort(np.column_stack([rows, cols]), axis=1), axis=0)
         n = len(self.points)
         lengths = np.linalg.norm(self.points[rows] - self.points[cols], axis=1)
         graph = sparse.coo_matrix((lengths, (rows, cols)), shape=(n, n)).tocsr()
-        graph = graph.maximum(graph.T)  # symmetric; an edge shared by elements counted once
+        graph = graph.maximum(graph.T)  # symmetric
         self.graph = graph.tocsr()
         self.dim = mesh.dim
 
     @property
     def n_nodes(self) -> int:
+        """The number of nodes."""
         return self.graph.shape[0]
+
+
+def _joined_pairs(mesh: ngs.Mesh, nodes: LagrangeNodes, joined: str) -> tuple[np.ndarray, np.ndarray]:
+    """The neighbour pairs (rows, cols) of :class:`NodeGraph`, one per element and pair
+    ("element") or per sub-simplex edge ("sub-simplices"), repeats included."""
+    corners = ElementGeometry.of(mesh).vertices
+    pairs = list(itertools.combinations(range(corners.shape[1]), 2))
+    if nodes.order == 2:
+        mids = nodes.nv + edge_numbers(nodes.edge_vertices, corners)
+    if joined == "element":
+        local = corners if nodes.order == 1 else np.column_stack([corners, mids])
+        columns = list(itertools.combinations(range(local.shape[1]), 2))
+        return (np.concatenate([local[:, i] for i, _ in columns]),
+                np.concatenate([local[:, j] for _, j in columns]))
+    if nodes.order == 1:
+        edges = np.concatenate([corners[:, [i, j]] for i, j in pairs])
+    else:
+        halves = np.concatenate([np.column_stack([nodes.edge_vertices[:, k], nodes.nv +
+                                                  np.arange(len(nodes.edge_vertices))])
+                                 for k in (0, 1)])
+        across = np.concatenate([mids[:, [i, j]] for i, j in
+                                 itertools.combinations(range(mids.shape[1]), 2)])
+        edges = np.concatenate([halves, across])
+    return edges[:, 0], edges[:, 1]
 
 
 @dataclass(frozen=True)
@@ -102,7 +131,8 @@ class CrackSet:
         Their distance along the crack from the initial crack.
     path : (k, d) array
         The grown crack as a polyline from ``start`` along the ridge to the tip (its points
-        about ``bin_width`` apart; just ``start`` while not grown).
+        about ``bin_width`` apart; just ``start`` while not grown). The arcs of
+        :func:`ngfrac.post.crackpath.final_ridge` measure the same path another way.
     grown_length : float
         Length of ``path`` (0 while not grown).
     n_damage_zones : int
@@ -227,16 +257,8 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         return not_grown(none)
     sub = graph.graph[cracked][:, cracked]
     n_components, labels = csgraph.connected_components(sub, directed=False)
-    if cracks:
-        distance = distance_to_cracks(points[cracked], cracks)
-        # the nodes on the initial cracks (they are mesh edges/faces; on a mesh that does not
-        # follow them, the nodes within half an element of them)
-        scale = float(np.ptp(points, axis=0).max())
-        seeds = distance <= max(1e-9 * scale, float(distance.min()) + 0.5 * float(np.median(sub.data)))
-    elif nucleus is not None:
-        nearest = int(np.argmin(np.linalg.norm(points[cracked] - np.asarray(nucleus)[:dim], axis=1)))
-        seeds = np.arange(len(cracked)) == nearest
-    else:
+    seeds = _seeds(points, cracked, sub, cracks, nucleus)
+    if seeds is None:
         return not_grown(none, n_zones=n_components)
     crack_labels = np.unique(labels[seeds])
     in_crack = np.isin(labels, crack_labels)
@@ -254,23 +276,12 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
     n_zones = n_components - len(crack_labels)
     ridge_grown = len(ridge_s) > 0 and ridge_s[-1] > band
     not_grown_tip = start if start is not None else (ridge_points[-1] if len(ridge_s) else none)
-    if dim == 2 and ridge_grown:
-        # the ridge's end and the direction there, from the ridge nodes near it and a little
-        # behind it (where z is nearly flat across a wide front, single nodes and the
-        # gradient of s scatter across the band)
-        end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
-        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
-        heading = end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[ridge][order][-1]
-    elif dim == 2 and cracks and start is not None:
-        # a crack that grew as a diffuse zone (z falls along it as fast as across, so no node
-        # ahead of the initial band passes the ridge test): its front from the initial tip,
-        # in the direction of the first crack's last segment
-        end = start
-        heading = np.asarray(cracks[0][-1], dtype=float) - np.asarray(cracks[0][-2], dtype=float)
-    elif ridge_grown:  # 3D: the most advanced node of the crack set
-        end, heading = ridge_points[-1], None
-    else:
+    ridge_direction = None if direction is None else direction[ridge][order]
+    end_heading = _end_and_heading(ridge_points, ridge_s, ridge_direction, ridge_grown, cracks,
+                                   start, bin_width)
+    if end_heading is None:
         return not_grown(not_grown_tip, ridge_points, ridge_s, n_zones, len(members))
+    end, heading = end_heading
     tip = end
     if heading is not None and np.linalg.norm(heading) > 0:
         tip = _front(points[members], s, end, heading / np.linalg.norm(heading), 0.25 * bin_width)
@@ -286,6 +297,48 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
                        origin, bin_width)
     length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
     return CrackSet(tip, ridge_points, ridge_s, path, length, n_zones, len(members))
+
+
+def _seeds(points: np.ndarray, cracked: np.ndarray, sub: sparse.csr_matrix,
+           cracks: Sequence[Sequence[Sequence[float]]], nucleus: np.ndarray | None) -> np.ndarray | None:
+    """Mask over the ``cracked`` nodes of those the crack set grows from: the nodes on the
+    initial cracks or, with none, the one nearest to ``nucleus``; None without either."""
+    if cracks:
+        distance = distance_to_cracks(points[cracked], cracks)
+        # the nodes on the initial cracks (they are mesh edges/faces; on a mesh that does not
+        # follow them, the nodes within half an element of them)
+        scale = float(np.ptp(points, axis=0).max())
+        return distance <= max(1e-9 * scale, float(distance.min()) + 0.5 * float(np.median(sub.data)))
+    if nucleus is not None:
+        dim = points.shape[1]
+        nearest = int(np.argmin(np.linalg.norm(points[cracked] - np.asarray(nucleus)[:dim], axis=1)))
+        return np.arange(len(cracked)) == nearest
+    return None
+
+
+def _end_and_heading(ridge_points: np.ndarray, ridge_s: np.ndarray, direction: np.ndarray | None,
+                     ridge_grown: bool, cracks: Sequence[Sequence[Sequence[float]]],
+                     start: np.ndarray | None, bin_width: float
+                     ) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """Where the front search starts and the direction of growth there (None in 3D); None
+    when the crack has not grown. ``direction``: the growth direction at the ridge points
+    (2D), None in 3D."""
+    dim = ridge_points.shape[1]
+    if dim == 2 and ridge_grown:
+        # the ridge's end and the direction there, from the ridge nodes near it and a little
+        # behind it (where z is nearly flat across a wide front, single nodes and the
+        # gradient of s scatter across the band)
+        end = ridge_points[ridge_s >= ridge_s[-1] - 0.25 * bin_width].mean(axis=0)
+        behind = (ridge_s >= ridge_s[-1] - 2 * bin_width) & (ridge_s <= ridge_s[-1] - 0.5 * bin_width)
+        return end, end - ridge_points[behind].mean(axis=0) if np.any(behind) else direction[-1]
+    if dim == 2 and cracks and start is not None:
+        # a crack that grew as a diffuse zone (z falls along it as fast as across, so no node
+        # ahead of the initial band passes the ridge test): its front from the initial tip,
+        # in the direction of the first crack's last segment
+        return start, np.asarray(cracks[0][-1], dtype=float) - np.asarray(cracks[0][-2], dtype=float)
+    if ridge_grown:  # 3D: the most advanced node of the crack set
+        return ridge_points[-1], None
+    return None
 
 
 def _front(points: np.ndarray, s: np.ndarray, ridge_end: np.ndarray, direction: np.ndarray,

@@ -1,4 +1,4 @@
-"""Per-step diagnostics: energies, crack length and tip, mesh statistics."""
+"""Per-step diagnostics: energies, crack length and element diameters."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 import ngsolve as ngs
 
+from ..mesh.remesh import ElementGeometry
 from ..physics.crack_models import AT2, CrackModel
 from ..solve.threads import integrate
 
@@ -22,6 +23,7 @@ class Energies:
 
     @property
     def E_total(self) -> float:
+        """``E_el + E_surf - work``."""
         return self.E_el + self.E_surf - self.work
 
 
@@ -44,17 +46,21 @@ def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.Coefficien
     return Energies(*values)
 
 
-def element_sizes(mesh: ngs.Mesh) -> np.ndarray:
-    """Longest edge of each volume element."""
-    coords = np.array(mesh.ngmesh.Coordinates())
-    if mesh.dim == 2:
-        nodes = mesh.ngmesh.Elements2D().NumPy()["nodes"]
-    else:
-        nodes = mesh.ngmesh.Elements3D().NumPy()["nodes"]
-    nodes = nodes[:, : mesh.dim + 1].astype(int) - 1  # netgen numbers points from 1
-    corners = coords[nodes]
-    longest = np.zeros(len(nodes))
-    for i in range(mesh.dim + 1):
-        for j in range(i + 1, mesh.dim + 1):
-            np.maximum(longest, np.linalg.norm(corners[:, i] - corners[:, j], axis=1), out=longest)
-    return longest
+def element_diameters(mesh: ngs.Mesh) -> np.ndarray:
+    """The longest edge of each volume element, in NGSolve's element order.
+
+    This is the element's h (Netgen's ``maxh`` is a longest edge); it is
+    :attr:`ngfrac.mesh.remesh.ElementGeometry.diameters`. Not to be confused with
+    :meth:`ngfrac.mesh.adapter.MeshAdapter.element_sizes`, the sizes the adapter requests.
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        A simplicial 2D or 3D mesh.
+
+    Returns
+    -------
+    numpy.ndarray
+        One length per volume element.
+    """
+    return ElementGeometry.of(mesh).diameters

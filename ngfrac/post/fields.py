@@ -23,47 +23,69 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import z_indicators
-from .diagnostics import element_sizes
+from .diagnostics import element_diameters
+from ..physics.crack_models import CrackModel
 from ..physics.splits import EnergySplit, principal_strains_3d
 
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper
 
-__all__ = ["degradation", "elastic_energy_density", "degraded_stress", "split_stresses",
+__all__ = ["elastic_energy_density", "undegraded_density", "degraded_stress", "split_stresses",
            "stress_components", "von_mises", "principal_stresses", "projected",
            "piecewise_constant", "snapshot_fields"]
 
 
-def degradation(z: Any, eta: float) -> Any:
-    """g(z) = (1 - z)^2 + eta, the factor of the elastic energy."""
-    return (1 - z) ** 2 + eta
+def elastic_energy_density(model: Any, split: EnergySplit | None, crack_model: CrackModel,
+                           u: Any, z: Any, eta: float) -> Any:
+    """The integrand of E_el.
 
+    ``1/2 g(z) sigma[u]:e[u]`` without a split, ``g(z) psi+ + psi-`` with one; ``g`` is the
+    crack model's degradation ``(1 - z)^2 + eta``.
 
-def elastic_energy_density(model: Any, split: EnergySplit | None, u: Any, z: Any,
-                           eta: float) -> Any:
-    """The integrand of E_el: ``1/2 g(z) sigma[u]:e[u]``, or ``g(z) psi+ + psi-`` with a split."""
+    Parameters
+    ----------
+    model : the elastic model (``ngfrac.physics.elastic``)
+    split : the energy split, or None
+    crack_model : the crack model, whose ``degradation`` g is used
+    u, z : the displacement and the phase field
+    eta : the residual stiffness
+    """
     if split is None:
-        return 0.5 * degradation(z, eta) * model.energy_density(u)
+        return 0.5 * crack_model.degradation(z, eta) * undegraded_density(model, split, crack_model,
+                                                                            u, z, eta)
     return split.elastic_density(u, z, eta)
 
 
-def degraded_stress(model: Any, split: EnergySplit | None, u: Any, z: Any, eta: float) -> Any:
+def undegraded_density(model: Any, split: EnergySplit | None, crack_model: CrackModel,
+                       u: Any, z: Any, eta: float) -> Any:
+    """W with ``E_el = 1/2 int g(z) W``: what :func:`ngfrac.post.diagnostics.energies` takes.
+
+    ``sigma[u]:e[u]`` without a split; with one ``2 (g(z) psi+ + psi-) / g(z)``, i.e.
+    2 :func:`elastic_energy_density` / g. Parameters as for :func:`elastic_energy_density`.
+    """
+    if split is None:
+        return model.energy_density(u)
+    return 2 * elastic_energy_density(model, split, crack_model, u, z, eta) / crack_model.degradation(z, eta)
+
+
+def degraded_stress(model: Any, split: EnergySplit | None, crack_model: CrackModel, u: Any,
+                    z: Any, eta: float) -> Any:
     """The stress of the degraded material, dW/de of :func:`elastic_energy_density`.
 
     Mode III: the vector ``g(z) mu grad u``; plane and 3D models: a dim x dim matrix,
     ``g(z) sigma[u]`` without a split, ``g(z) sigma+ + sigma-`` with one
-    (:func:`split_stresses`).
+    (:func:`split_stresses`). Parameters as for :func:`elastic_energy_density`.
     """
+    g = crack_model.degradation(z, eta)
     if split is None:  # mode III: model.stress is the shear stress vector
-        return degradation(z, eta) * model.stress(u)
+        return g * model.stress(u)
     plus, minus = split_stresses(split, ngs.Sym(ngs.grad(u)))
-    return degradation(z, eta) * plus + minus
+    return g * plus + minus
 
 
 def split_stresses(split: EnergySplit, e: Any) -> tuple[Any, Any]:
     """sigma+ = dpsi+/de and sigma- = dpsi-/de of a split at the strain e (dim x dim), in
-    closed form (NGSolve's symbolic ``Diff`` of the 3D spectral density gave the same values
-    but took 360 s to write one VTK snapshot of 297 tetrahedra).
+    closed form (why not NGSolve's ``Diff``: docs/user-guide.md, "Cost of the split stresses").
 
     Amor: ``sigma+ = K <tr e>_+ I + 2 mu dev e``, ``sigma- = K <tr e>_- I``. Miehe:
     ``sigma+ = lam <tr e>_+ I + 2 mu <e>_+`` with ``<e>_+ = sum_i <e_i>_+ P_i`` (the
@@ -128,10 +150,8 @@ def principal_stresses(stress: Any, dim: int) -> Any:
 def projected(stress: Any, mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
     """A 3x3 stress as its L2 projection per element, of polynomial order ``order``.
 
-    Used for the 3D spectral split: NGSolve rewrites the entries of its closed-form stress
-    (picking entry (i, j) of a product of matrices becomes a sum of products, recursively), so
-    von Mises and the principal values of it cost ~1 s per point (a snapshot of 297
-    tetrahedra took 109 s); evaluated once per point into a GridFunction they cost ~30 us.
+    Used for the 3D spectral split, whose closed-form stress is slow to evaluate entry by
+    entry (docs/user-guide.md, "Cost of the split stresses").
     """
     gf = ngs.GridFunction(ngs.MatrixValued(ngs.L2(mesh, order=order), dim=3), "stress")
     gf.Set(stress)
@@ -149,13 +169,13 @@ def snapshot_fields(stepper: "PhaseFieldStepper") -> dict[str, Any]:
     """The fields of one VTK snapshot of a stepper, by name (see the module docstring)."""
     mesh, u, z = stepper.mesh, stepper.u, stepper.z
     eta = stepper.scene.phase_field.residual_stiffness
-    model, split = stepper.model, stepper.split
+    model, split, crack_model = stepper.model, stepper.split, stepper.crack_model
     gamma = stepper.gamma
     fields: dict[str, Any] = {"u": u, "z": z,
                               "gamma": (ngs.CoefficientFunction(float(gamma)) if isinstance(gamma, (int, float))
                                         else gamma),
-                              "energy_density": elastic_energy_density(model, split, u, z, eta)}
-    stress = degraded_stress(model, split, u, z, eta)
+                              "energy_density": elastic_energy_density(model, split, crack_model, u, z, eta)}
+    stress = degraded_stress(model, split, crack_model, u, z, eta)
     if model.n_components == 1:
         fields["stress"] = stress
     else:
@@ -165,5 +185,5 @@ def snapshot_fields(stepper: "PhaseFieldStepper") -> dict[str, Any]:
         fields["von_mises"] = von_mises(stress, model)
         fields["principal_stress"] = principal_stresses(stress, mesh.dim)
     fields["estimator"] = piecewise_constant(mesh, z_indicators(stepper.scene, z), "estimator")
-    fields["h"] = piecewise_constant(mesh, element_sizes(mesh), "h")
+    fields["h"] = piecewise_constant(mesh, element_diameters(mesh), "h")
     return fields

@@ -86,6 +86,7 @@ class StudyTable:
 
     @property
     def names(self) -> list[str]:
+        """The error names, in the order given to the study."""
         return list(self.rows[0].errors) if self.rows else []
 
     def errors(self, name: str) -> np.ndarray:

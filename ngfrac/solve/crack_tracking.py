@@ -5,7 +5,7 @@ import numpy as np
 
 from ..physics.crack_models import CrackModel
 from ..post.crackset import CrackSet, NodeGraph, find_crack
-from ..post.diagnostics import element_sizes
+from ..post.diagnostics import element_diameters
 from .spaces import MeshFields
 
 
@@ -41,7 +41,7 @@ class CrackTracker:
         """The element diameters of the fields' mesh (cached per mesh)."""
         self._use(fields)
         if self._sizes is None:
-            self._sizes = element_sizes(fields.mesh)
+            self._sizes = element_diameters(fields.mesh)
         return self._sizes
 
     def _use(self, fields: MeshFields) -> None:

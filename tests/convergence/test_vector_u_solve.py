@@ -16,7 +16,7 @@ from ngfrac.mesh.domains import build_mesh
 from ngfrac.scene import Material
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 ETA = 1e-6
 E, NU = 50.0, 0.29

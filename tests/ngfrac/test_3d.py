@@ -14,7 +14,7 @@ from ngfrac.post.reactions import reaction_forces
 from ngfrac.scene import Scene, SceneError
 from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 CRACK = [[0.0, 0.5, 0.0], [0.3, 0.5, 0.0], [0.3, 0.5, 0.5], [0.0, 0.5, 0.5]]
 """An edge crack through the depth of the 1 x 1 x 0.5 box, on y = 0.5, from the left face."""

@@ -12,7 +12,7 @@ from ngfrac.mesh.remesh import ElementGeometry
 from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 EPS = 0.04
 SLIT = [(0.0, 0.5), (0.5, 0.5)]

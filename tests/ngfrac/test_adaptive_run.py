@@ -9,7 +9,7 @@ from ngfrac.mesh.adapter import AdaptivitySizes
 from ngfrac.solve.stepper import PhaseFieldStepper
 from ngfrac.mesh.transfer import evaluate, locate
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 CAP = 2500
 HMIN = 2e-3

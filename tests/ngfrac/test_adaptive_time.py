@@ -4,7 +4,7 @@ import pytest
 
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 DT = 2.5e-4
 ADAPTIVE = [f"time.dt={DT}", "time.adaptive=true", "time.max_doublings=4"]

@@ -18,7 +18,7 @@ from ngfrac.io.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoi
 from ngfrac.io.results import MeshArrays
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -240,11 +240,9 @@ def test_failed_write_keeps_the_previous_checkpoint(copy_of_checkpoint, scene, m
 
 # -- SIGKILL -----------------------------------------------------------------------------------
 CHILD = textwrap.dedent("""
-    import sys
     import ngsolve as ngs
     ngs.SetNumThreads(1)
-    sys.path.append({tests!r})
-    from scenes import quick_slit
+    from ngfrac.testing.scenes import quick_slit
     from ngfrac.io.checkpoint import save_checkpoint
     from ngfrac.solve.stepper import PhaseFieldStepper
 
@@ -260,7 +258,7 @@ CHILD = textwrap.dedent("""
 def test_sigkill_leaves_a_checkpoint_that_restarts_exactly(tmp_path, scene, reference):
     records, _ = reference
     path = tmp_path / "checkpoint.h5"
-    code = CHILD.format(tests=str(ROOT / "tests"), scene=SCENE, path=str(path))
+    code = CHILD.format(scene=SCENE, path=str(path))
     child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
                              cwd=ROOT)
     try:

@@ -9,8 +9,8 @@ from ngfrac.scene.checks import estimated_vertices
 from ngfrac.mesh.domains import build_mesh
 from ngfrac.scene import Geometry, SceneError
 
-from bad_inputs import BAD_2D, BAD_3D, BAD_EXPRESSIONS, BOX_CRACK, SLIT
-from scenes import demo_data, quick_slit, scene_from
+from ngfrac.testing.bad_inputs import BAD_2D, BAD_3D, BAD_EXPRESSIONS, BOX_CRACK, SLIT
+from ngfrac.testing.scenes import demo_data, quick_slit, scene_from
 
 def refused(data, match):
     with pytest.raises(SceneError, match=match) as info:

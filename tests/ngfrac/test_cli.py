@@ -10,7 +10,7 @@ from ngfrac import cli
 from ngfrac.solve import stepper as stepper_module
 from ngfrac.mesh.domains import build_mesh
 
-from bad_inputs import ALL_CASES, bad_scene_file
+from ngfrac.testing.bad_inputs import ALL_CASES, bad_scene_file
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIT = str(ROOT / "demos" / "mode3_slit.toml")

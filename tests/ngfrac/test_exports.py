@@ -10,7 +10,7 @@ import pytest
 from ngfrac.io.plotting import plot_mesh, plot_run, read_history
 from ngfrac.runner import run_scene
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 
 @pytest.fixture(scope="module")

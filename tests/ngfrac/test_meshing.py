@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import logging
-import time
 
 import numpy as np
 import ngsolve as ngs
@@ -234,71 +233,3 @@ def test_sample_size_field_weights_and_density():
     spacing = np.median(np.sort(np.linalg.norm(field.points[:200, None] - field.points[None],
                                                axis=2), axis=1)[:, 1])
     assert spacing < 0.02
-
-
-@pytest.mark.slow
-def test_benchmark_numbers(caplog):
-    """Timings and the vertex-density calibration (printed, never asserted on)."""
-    caplog.set_level(logging.WARNING)
-    eps = 0.01
-    line = [[(0.0, 0.5), (0.5, 0.5)]]
-    rows = []
-    for h_band in (eps / 2, eps / 3, eps / 4):
-        mesh = build_mesh(SQUARE, 0.05)
-        for _ in range(3):
-            geom = ElementGeometry.of(mesh)
-            sizes = np.where(distance_to_polylines(geom.centroids, line) < 4 * eps, h_band, HMAX)
-            graded = meshing.element_grader(geom)(sizes)
-            integral = predict_vertices(graded, geom.measures, density=1.0)
-            field = sample_size_field(mesh, graded)
-            started = time.perf_counter()
-            remesh(SQUARE, field.points, field.sizes, weights=field.weights, hmax=HMAX,
-                   max_vertices=10**6)
-            alone = time.perf_counter() - started
-            started = time.perf_counter()
-            mesh = adapt_mesh(mesh, SQUARE, sizes, hmax=HMAX, max_vertices=10**6)
-            rows.append((h_band, mesh.nv, mesh.nv / integral, alone,
-                         time.perf_counter() - started, len(field.sizes)))
-    print("\n".join(f"h_band={h:.4f} nv={nv:6d} c={c:.3f} remesh={t:.2f}s adapt_mesh={ta:.2f}s "
-                    f"points={n}" for h, nv, c, t, ta, n in rows))
-
-
-@pytest.mark.slow
-def test_benchmark_bisection_against_regeneration():
-    """Rebuild by marked bisection from the base mesh against regeneration (printed)."""
-    line = [[(0.0, 0.5), (0.5, 0.5)]]
-    for hmin in (0.005, 0.0025, 0.00125):
-        def field(points):
-            return np.clip(hmin + 0.3 * distance_to_polylines(points, line), hmin, HMAX)
-
-        started = time.perf_counter()
-        mesh = build_mesh(SQUARE, HMAX)
-        while True:
-            geom = ElementGeometry.of(mesh)
-            coarse = geom.diameters > 1.5 * field(geom.centroids)
-            if not coarse.any():
-                break
-            mesh.SetRefinementFlags(coarse.tolist())
-            mesh.Refine()
-        bisect_time = time.perf_counter() - started
-        started = time.perf_counter()
-        regenerated = adapt_to(mesh, field, times=1)
-        regen_time = time.perf_counter() - started
-        for name, m, t in (("bisection", mesh, bisect_time), ("regeneration", regenerated,
-                                                              regen_time)):
-            geom = ElementGeometry.of(m)
-            ratio = geom.diameters / field(geom.centroids)
-            print(f"hmin={hmin} {name:12s} nv={m.nv:6d} time={t:.2f}s "
-                  f"min angle p5={np.percentile(_smallest_angles(geom), 5):.1f} deg "
-                  f"L/h median={np.median(ratio):.2f} p95={np.percentile(ratio, 95):.2f}")
-
-
-def _smallest_angles(geom: ElementGeometry) -> np.ndarray:
-    corners = geom.coordinates[geom.vertices]
-    angles = []
-    for i in range(3):
-        a = corners[:, (i + 1) % 3] - corners[:, i]
-        b = corners[:, (i + 2) % 3] - corners[:, i]
-        cosine = np.sum(a * b, axis=1) / np.linalg.norm(a, axis=1) / np.linalg.norm(b, axis=1)
-        angles.append(np.degrees(np.arccos(np.clip(cosine, -1, 1))))
-    return np.min(angles, axis=0)

@@ -16,7 +16,7 @@ from ngfrac.mesh.domains import build_mesh
 from ngfrac.post.reactions import reaction_columns, reaction_forces
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 W, H, DELTA, ETA = 2.0, 0.5, 0.01, 1e-6
 E, NU = 50.0, 0.29

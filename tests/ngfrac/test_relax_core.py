@@ -15,7 +15,7 @@ import pytest
 from ngfrac.post.reactions import reaction_columns
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 QUICK_SENT = ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3", "output.vtk_every=0",
               "adaptivity.max_vertices=2000"]

@@ -12,7 +12,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 TIMING = {"wall_s", "step_s", "solve_s", "adapt_s"}
-# The quick slit (tests/scenes.py) with coarse steps: the crack runs through the plate in
+# The quick slit (ngfrac/testing/scenes.py) with coarse steps: the crack runs through the plate in
 # 45 steps and the mesh changes several times.
 OVERRIDES = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "time.dt=4e-3",
              "time.t_end=0.18", "adaptivity.max_vertices=2500", "output.vtk_every=0",

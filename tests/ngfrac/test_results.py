@@ -14,7 +14,7 @@ from ngfrac.io.hdf5 import MeshArrays, ResultsError, StoredField
 from ngfrac.io.results import FORMAT_VERSION, ResultsWriter, open_results
 from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -2,7 +2,7 @@
 import dataclasses
 
 import pytest
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 from ngfrac import PhaseFieldStepper
 

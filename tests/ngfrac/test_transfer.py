@@ -1,19 +1,20 @@
 """Field transfer between meshes (ngfrac.mesh.transfer)."""
 from __future__ import annotations
 
+import functools
 import logging
-import time
 
 import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
+from ngfrac.physics.cracks import distance_to_polylines
 from ngfrac.mesh.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, edge_numbers
+from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh
 from ngfrac.solve.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 from ngfrac.mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
+from ngfrac.testing import meshes
 
 SQUARE = Geometry(width=1.0, height=1.0)
 EPS = 0.02
@@ -28,36 +29,10 @@ def refined_copy(mesh: ngs.Mesh) -> ngs.Mesh:
     return ngs.Mesh(ngmesh.Copy())
 
 
-def profile_field(mesh: ngs.Mesh, order: int) -> ngs.GridFunction:
-    """z = exp(-dist/eps) at the Lagrange nodes."""
-    fes = ngs.H1(mesh, order=order)
-    z = ngs.GridFunction(fes, "z")
-    nodes = LagrangeNodes(fes)
-    nodes.assign(z, optimal_profile(distance_to_polylines(nodes.points, CRACK), EPS))
-    return z
-
-
-def element_maximum(z: ngs.GridFunction) -> np.ndarray:
-    """Largest Lagrange-node value of z on each element."""
-    nodes = LagrangeNodes(z.space)
-    index = ElementGeometry.of(z.space.mesh).vertices
-    if nodes.order == 2:
-        index = np.hstack([index, nodes.nv + edge_numbers(nodes.edge_vertices, index)])
-    return nodes.values(z)[index].max(axis=1)
-
-
-def crack_mesh(start: ngs.Mesh, *, h_band: float, h_core: float, hmax: float, width: float,
-               order: int = 2) -> ngs.Mesh:
-    """h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
-    mesh = start
-    for _ in range(2):
-        geom = ElementGeometry.of(mesh)
-        band = distance_to_polylines(geom.centroids, CRACK) < width
-        sizes = np.where(band, h_band, hmax)
-        cracked = element_maximum(profile_field(mesh, order)) >= 0.6
-        sizes = np.where(cracked, np.minimum(sizes, h_core), sizes)
-        mesh = adapt_mesh(mesh, SQUARE, sizes, hmax=hmax, max_vertices=10**6)
-    return mesh
+profile_field = functools.partial(meshes.profile_field, epsilon=EPS, cracks=CRACK)
+"""z = exp(-dist/eps) at the Lagrange nodes."""
+crack_mesh = functools.partial(meshes.crack_mesh, epsilon=EPS, cracks=CRACK, geometry=SQUARE)
+"""h <= h_band within ``width`` of the crack, h <= h_core where z >= 0.6."""
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -169,25 +144,3 @@ def test_crack_length_survives_on_crack_aligned_meshes_at_eps_over_2():
     before, after = crack_length(z, EPS), crack_length(z_new, EPS)
     assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.005)
     assert abs(after - before) < 0.001 * before, (before, after)
-
-
-@pytest.mark.slow
-def test_benchmark_transfer(caplog):
-    """Timings of a transfer to a ~5,000-vertex mesh (printed, never asserted on)."""
-    old = crack_mesh(build_mesh(SQUARE, 0.05), h_band=EPS / 3, h_core=EPS / 3, hmax=0.1,
-                     width=6 * EPS)
-    new = crack_mesh(old, h_band=0.3 * EPS, h_core=0.3 * EPS, hmax=0.08, width=5 * EPS)
-    z = profile_field(old, 2)
-    u = ngs.GridFunction(ngs.H1(old, order=2))
-    u.Set(SMOOTH)
-    fes = ngs.H1(new, order=2)
-    started = time.perf_counter()
-    transfer_phase_field(z, z, fes)
-    phase = time.perf_counter() - started
-    timings = []
-    for method in ("set", "nodes"):
-        started = time.perf_counter()
-        transfer(u, fes, method)
-        timings.append(time.perf_counter() - started)
-    print(f"nv {old.nv} -> {new.nv}, {fes.ndof} P2 nodes: transfer_phase_field {phase:.3f} s, "
-          f"transfer(u) set {timings[0]:.3f} s, nodes {timings[1]:.3f} s")

@@ -11,7 +11,7 @@ from ngfrac.io.results import ResultsWriter
 from ngfrac.runner import write_snapshot
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """Stability stress cases (issue 6, item 5): every step keeps u and z finite, z in [0, 1] and
 non-decreasing at the nodes, and E_total non-increasing while the load is held on an unchanged
-mesh; each case also shows one physical fact. The cases are in stress_cases.py;
+mesh; each case also shows one physical fact. The cases are in ngfrac/testing/stress_cases.py;
 benchmarks/stress_table.py prints the measured table of docs/stress.md."""
 import functools
 import os
@@ -8,7 +8,7 @@ import os
 import ngsolve as ngs
 import pytest
 
-import stress_cases as sc
+from ngfrac.testing import stress_cases as sc
 
 pytestmark = pytest.mark.stress
 

@@ -8,7 +8,7 @@ import pytest
 from ngfrac.runner import CHECKPOINT
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-import stress_cases as sc
+from ngfrac.testing import stress_cases as sc
 
 pytestmark = pytest.mark.stress
 

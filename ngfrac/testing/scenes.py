@@ -1,4 +1,4 @@
-"""Small scenes for tests: the slit demo made coarse and short."""
+"""Small scenes for tests: the slit demo made coarse and short (reads the checkout's demos/)."""
 from __future__ import annotations
 
 import copy
@@ -7,7 +7,7 @@ from typing import Any
 
 from ngfrac.scene import Scene, apply_overrides, read_scene_data
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DEMOS = ROOT / "demos"
 
 QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0",
@@ -20,6 +20,7 @@ def demo_data(name: str = "mode3_slit") -> dict[str, Any]:
 
 
 def scene_from(data: dict[str, Any], *overrides: str) -> Scene:
+    """A scene from raw data (copied) with ``--set`` style overrides applied."""
     return Scene.from_dict(apply_overrides(copy.deepcopy(data), list(overrides)))
 
 

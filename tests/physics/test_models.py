@@ -10,7 +10,7 @@ from ngfrac.physics.elastic import AntiPlane, PlaneStrain, PlaneStress, make_mod
 from ngfrac.io.output import to_toml
 from ngfrac.scene import Material, Scene, SceneError, load_scene
 
-from scenes import demo_data
+from ngfrac.testing.scenes import demo_data
 
 
 def plane_data(kind="plane_strain"):

@@ -20,13 +20,13 @@ from typing import Callable
 import numpy as np
 import ngsolve as ngs
 
-from ngfrac.io.checkpoint import load_checkpoint
-from ngfrac.physics.cracks import optimal_profile
-from ngfrac.runner import CHECKPOINT, run_scene
-from ngfrac.scene import Components, Scene
-from ngfrac.solve.stepper import PhaseFieldStepper, SolverError
+from ..io.checkpoint import load_checkpoint
+from ..physics.cracks import optimal_profile
+from ..runner import CHECKPOINT, run_scene
+from ..scene import Components, Scene
+from ..solve.stepper import PhaseFieldStepper, SolverError
 
-from scenes import demo_data, scene_from
+from .scenes import demo_data, scene_from
 
 TOL = 1e-12
 """Round-off allowed in the bounds, in the monotonicity of z and (relative) in the energy."""
@@ -61,8 +61,9 @@ def plane_strain(expression: str, *overrides: str) -> Scene:
 
 
 # -- the checks ---------------------------------------------------------------------------
-def _load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
-    """The values of every load and body-force expression at sample points, at time t."""
+def load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
+    """The values of every load and body-force expression at points of the rectangle's four
+    sides, at time t."""
     g = scene.geometry
     x0, y0 = g.origin
     s = np.linspace(0.0, 1.0, 17)
@@ -70,14 +71,44 @@ def _load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
                          np.full_like(s, x0)])
     ys = np.concatenate([np.full_like(s, y0), y0 + s * g.height, np.full_like(s, y0 + g.height),
                          y0 + s * g.height])
-    expressions = []
-    for value in [load.value for load in scene.loads] + [scene.material.body_force]:
-        entries = value if isinstance(value, Components) else (value,)
-        expressions += [e for e in entries if not isinstance(e, str)]
+    expressions = _load_expressions(scene)
 
     def sample(t: float) -> np.ndarray:
         return np.concatenate([np.broadcast_to(e.evaluate_numpy({"x": xs, "y": ys, "t": t}),
                                                xs.shape) for e in expressions])
+    return sample
+
+
+def _load_expressions(scene: Scene) -> list:
+    """Every load component and the body force that is an expression (not ``free``)."""
+    expressions = []
+    for value in [load.value for load in scene.loads] + [scene.material.body_force]:
+        entries = value if isinstance(value, Components) else (value,)
+        expressions += [e for e in entries if not isinstance(e, str)]
+    return expressions
+
+
+def box_load_sampler(scene: Scene) -> Callable[[float], np.ndarray]:
+    """Every load expression at points of the box's six faces, at time t (the 3D version of
+    :func:`load_sampler`)."""
+    g = scene.geometry
+    s = np.linspace(0.0, 1.0, 7)
+    u, v = (a.ravel() for a in np.meshgrid(s, s))
+    points = []
+    for axis in range(3):
+        for end in (0.0, 1.0):
+            p = np.empty((len(u), 3))
+            others = [i for i in range(3) if i != axis]
+            p[:, axis] = end
+            p[:, others[0]], p[:, others[1]] = u, v
+            points.append(np.asarray(g.origin) + p * np.asarray(g.extent))
+    xs, ys, zs = np.vstack(points).T
+    expressions = _load_expressions(scene)
+
+    def sample(t: float) -> np.ndarray:
+        return np.concatenate([np.broadcast_to(e.evaluate_numpy({"x": xs, "y": ys, "z": zs, "t": t}),
+                                               xs.shape) for e in expressions])
+
     return sample
 
 
@@ -86,19 +117,21 @@ class StabilityMonitor:
     """Watches a stepper step by step; call :meth:`observe` after every step."""
 
     stepper: PhaseFieldStepper
+    sampler: Callable[[Scene], Callable[[float], np.ndarray]] = load_sampler
+    """Makes the load sampler of the stepper's scene (:func:`box_load_sampler` for a box)."""
     z_outside: float = 0.0
     """Largest violation of 0 <= z <= 1 at a node."""
     z_decrease: float = 0.0
     """Largest decrease of z at a node from one step to the next on an unchanged mesh."""
     energy_rise: float = -math.inf
-    """Largest (E_k - E_{k-1}) / |E_{k-1}| over held-load steps on an unchanged mesh."""
+    """Largest ``(E_k - E_{k-1}) / |E_{k-1}|`` over held-load steps on an unchanged mesh."""
     held_steps: int = 0
     first_nonfinite: int | None = None
     max_nv: int = 0
     records: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self._sample = _load_sampler(self.stepper.scene)
+        self._sample = self.sampler(self.stepper.scene)
         self._previous = self.stepper.record()
         self._values = self._check_state(self._previous)
         self.records.append(self._previous)
@@ -143,6 +176,8 @@ class StabilityMonitor:
 # -- the cases ----------------------------------------------------------------------------
 @dataclass(frozen=True)
 class CaseResult:
+    """A finished case: its scene, stepper and monitor, and the wall time of the run."""
+
     case: "StressCase"
     scene: Scene
     stepper: PhaseFieldStepper
@@ -151,16 +186,20 @@ class CaseResult:
 
     @property
     def records(self) -> list:
+        """Every record, the initial state first."""
         return self.monitor.records
 
     @property
     def steps(self) -> int:
+        """The number of steps run."""
         return self.records[-1].step
 
     def last(self, name: str) -> float:
+        """A field of the last record."""
         return getattr(self.records[-1], name)
 
     def series(self, name: str) -> np.ndarray:
+        """A field of every record as an array."""
         return np.array([getattr(r, name) for r in self.records], dtype=float)
 
 
@@ -182,6 +221,8 @@ class StressCase:
     energy_known: str | None = None
     """Why E_total is known to rise in this case (a library weakness); :func:`problems`
     then leaves the energy out and :func:`energy_problems` reports it."""
+    sampler: Callable[[Scene], Callable[[float], np.ndarray]] = load_sampler
+    """Makes the sampler that tells whether the load is held (:func:`box_load_sampler` for a box)."""
 
 
 def run_case(case: StressCase) -> CaseResult:
@@ -191,7 +232,7 @@ def run_case(case: StressCase) -> CaseResult:
     stepper = PhaseFieldStepper(scene)
     if case.prepare is not None:
         case.prepare(stepper)
-    monitor = StabilityMonitor(stepper)
+    monitor = StabilityMonitor(stepper, case.sampler)
     for record in stepper.run(history_every=1):
         monitor.observe(record)
     return CaseResult(case, scene, stepper, monitor, time.perf_counter() - started)
@@ -215,6 +256,7 @@ def energy_problems(result: CaseResult) -> list[str]:
 
 
 def summary(result: CaseResult) -> str:
+    """One line on a finished case, for assertion messages."""
     m = result.monitor
     return (f"{result.case.name}: {result.steps} steps in {result.wall_s:.1f} s, "
             f"z outside [0,1] {m.z_outside:.2e}, z decrease {m.z_decrease:.2e}, "
@@ -235,6 +277,7 @@ def _expect(condition: bool, text: str) -> list[str]:
 
 
 def check_crosses(result: CaseResult) -> list[str]:
+    """The tip reached x > 0.95: the crack crossed the plate."""
     tip = np.nanmax(result.series("tip_x"))
     return _expect(tip > 0.95, f"the crack did not cross the plate (tip_x max {tip:.3f})")
 
@@ -282,6 +325,8 @@ def check_no_healing(result: CaseResult) -> list[str]:
 
 
 def check_cap(limit: int) -> Callable[[CaseResult], list[str]]:
+    """The check of a capped adaptive run: at most ``limit`` vertices, at least three mesh
+    changes, and the crack crossed the plate."""
     def check(result: CaseResult) -> list[str]:
         found = _expect(result.monitor.max_nv <= limit,
                         f"{result.monitor.max_nv} vertices, above the cap {limit}")
@@ -292,7 +337,7 @@ def check_cap(limit: int) -> Callable[[CaseResult], list[str]]:
 
 
 def cracked_annulus(stepper: PhaseFieldStepper) -> None:
-    """z = 1 on the annulus 0.12 <= |x - (0.65, 0.5)| <= 0.25 (14% of the plate), with the
+    """z = 1 on the annulus ``0.12 <= |x - (0.65, 0.5)| <= 0.25`` (14% of the plate), with the
     optimal profile outside: the island inside is held by the residual stiffness alone."""
     points = stepper.nodes.points
     r = np.hypot(points[:, 0] - 0.65, points[:, 1] - 0.5)
@@ -390,6 +435,41 @@ CASES: list[StressCase] = [
 CASE_BY_NAME = {case.name: case for case in CASES}
 
 
+# -- the 3D case --------------------------------------------------------------------------
+def box_scene_data() -> dict:
+    """A unit cube pulled apart in y (top face y = 1 up, bottom face y = 0 clamped), the
+    load ramped to t = 0.1 and then held: the 3D twin of the held-load stress cases."""
+    data = demo_data()
+    data["model"] = {"kind": "elasticity_3d"}
+    data["material"] = {"E": 50.0, "nu": 0.29, "gamma": 1.0}
+    data["geometry"] = {"kind": "box", "width": 1.0, "height": 1.0, "depth": 1.0, "mesh_size": 0.2}
+    data["cracks"] = []
+    data["loads"] = [{"boundary": "top", "value": ["0", "10*min(t, 0.1)", "0"]},
+                     {"boundary": "bottom", "value": ["0", "0", "0"]}]
+    data["phase_field"]["epsilon"] = 0.2
+    data["time"] = {"dt": 4e-3, "t_end": 0.2}
+    data["adaptivity"] = {"enabled": False}
+    data["discretization"] = {"order": 1}
+    data["output"] = {"vtk_every": 0, "checkpoint_every": 0}
+    return data
+
+
+def check_box_damaged(result: CaseResult) -> list[str]:
+    """The cube damaged and carries less than twice its sound stiffness (E strain area)."""
+    last = result.records[-1]
+    sound = 50.0 * 0.1 * 1.0
+    return (_expect(last.dz_max >= 0 and last.crack_length > 0.01,
+                    f"no damage: crack length {last.crack_length:.3g}")
+            + _expect(0 < last.forces["Fy_top"] < 2 * sound and math.isfinite(last.E_total),
+                      f"force on the top {last.forces['Fy_top']:.3g} outside (0, {2 * sound:g})"))
+
+
+BOX_3D = StressCase("box_3d", "unit cube pulled apart in y (E 50, nu 0.29, h 0.2), P1, ramp "
+                    "and hold", lambda: Scene.from_dict(box_scene_data()), check_box_damaged,
+                    min_held=20, sampler=box_load_sampler)
+"""The 3D case of tests/stress/test_stress_3d.py; its sampler walks the six faces."""
+
+
 # -- a forced solver failure with checkpoints ---------------------------------------------
 FAIL_AT = 5
 FAILURE_SCENE = ("output.checkpoint_every=2", "time.dt=1e-3", "time.t_end=0.01")
@@ -397,6 +477,7 @@ FAILURE_SCENE = ("output.checkpoint_every=2", "time.dt=1e-3", "time.t_end=0.01")
 
 
 def failure_scene() -> Scene:
+    """The slit, ramped and held, ten steps with a checkpoint every two."""
     return slit(*mode3_load(RAMP_HOLD), *FAILURE_SCENE)
 
 
@@ -433,6 +514,9 @@ def poison(sub_step: str) -> tuple[str, Callable]:
 
 @dataclass(frozen=True)
 class FailureResult:
+    """What :func:`run_failure` saw: the error, the checkpoint's step, the restart's last
+    step and whether it matched the uninterrupted run, and the wall time."""
+
     error: SolverError | None
     checkpoint_step: int | None
     restarted_step: int | None

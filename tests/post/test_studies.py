@@ -11,8 +11,8 @@ from ngfrac.scene import SceneError
 from ngfrac.solve.stepper import PhaseFieldStepper
 from ngfrac.post.studies import StudyRun, convergence_study, fit_rate, scene_with
 
-from convergence.test_u_solve import scene as u_solve_scene
-from scenes import quick_slit
+from ngfrac.testing.manufactured import u_scene as u_solve_scene
+from ngfrac.testing.scenes import quick_slit
 
 EXACT = ngs.sin(ngs.pi * ngs.x) * ngs.sin(ngs.pi * ngs.y)
 GRAD_EXACT = ngs.CoefficientFunction((ngs.pi * ngs.cos(ngs.pi * ngs.x) * ngs.sin(ngs.pi * ngs.y),
@@ -20,7 +20,7 @@ GRAD_EXACT = ngs.CoefficientFunction((ngs.pi * ngs.cos(ngs.pi * ngs.x) * ngs.sin
 
 
 def frozen_z_u_solve(scene):
-    """One u-solve with z = (x + y)/4 frozen (the manufactured problem of test_u_solve), on
+    """One u-solve with z = (x + y)/4 frozen (the manufactured problem of ngfrac.testing.manufactured), on
     the uniform mesh of ``geometry.mesh_size`` (the demo scene it starts from is adaptive)."""
     stepper = PhaseFieldStepper(scene, mesh=build_mesh(scene.geometry, scene.mesh_size))
     points = stepper.nodes.points

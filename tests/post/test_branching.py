@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.post.branching import crack_topology, crack_topology_of, node_graph
+from ngfrac.post.branching import crack_topology, crack_topology_of
+from ngfrac.post.crackset import NodeGraph
 from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
 from ngfrac.solve.nodal import LagrangeNodes
 
@@ -73,9 +74,9 @@ def test_no_damage_and_isolated_spots():
         crack_topology(points, edges, np.zeros(3), spacing=0.0)
 
 
-def test_node_graph_of_p2_joins_the_midpoints(mesh):
+def test_sub_simplex_graph_of_p2_joins_the_midpoints(mesh):
     fes = ngs.H1(mesh, order=2)
     nodes = LagrangeNodes(fes)
-    edges = node_graph(nodes, mesh)
+    edges = NodeGraph(mesh, nodes, joined="sub-simplices").edges
     # each mesh edge in two halves plus three midpoint edges per triangle: the P2 lattice
     assert len(edges) == 2 * len(nodes.edge_vertices) + 3 * mesh.ne

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ngfrac.io.output import to_toml
 from ngfrac.scene import apply_overrides
-from scenes import demo_data
+from .scenes import demo_data
 
 SLIT = [[0.0, 0.5], [0.3, 0.5]]
 BOX_CRACK = [[0.0, 0.5, 0.0], [0.3, 0.5, 0.0], [0.3, 0.5, 0.1], [0.0, 0.5, 0.1]]

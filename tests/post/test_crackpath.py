@@ -7,9 +7,8 @@ import pytest
 from netgen.geom2d import unit_square
 
 from ngfrac.post.crackpath import (CrackPath, connected_part, crack_path_rows, deviation_from_line,
-                              final_ridge,
-                              history_path, initial_tip, kink_angle, mts_kink_angle, ridge_path,
-                              sharp_crack_solution, stress_intensity_from_jump)
+                                  final_ridge, history_path, kink_angle, mts_kink_angle, ridge_path,
+                                  sharp_crack_solution, stress_intensity_from_jump, tip_and_direction)
 from ngfrac.scene import Scene
 
 
@@ -45,7 +44,7 @@ def test_ridge_path_finds_a_straight_kink(angle):
     mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.01))
     tip, eps = (0.5, 0.5), 0.02
     z = kinked_crack_z(mesh, tip, angle, eps)
-    origin, reference = initial_tip([[0.0, 0.5], [0.5, 0.5]])
+    origin, reference = tip_and_direction([[0.0, 0.5], [0.5, 0.5]])
     path = ridge_path(mesh, z, origin, reference, np.linspace(eps, 6 * eps, 21))
     assert len(path.points) == 21
     assert kink_angle(path, eps, 6 * eps) == pytest.approx(angle, abs=0.5)

@@ -12,7 +12,7 @@ from ngfrac.io.output import to_toml
 from ngfrac.scene import (Components, Crack, Discretization, Geometry, Load, Material, Model, Output,
                           PhaseField, Scene, SceneError, TimeSettings, apply_overrides, load_scene)
 
-from scenes import DEMOS, demo_data, scene_from
+from ngfrac.testing.scenes import DEMOS, demo_data, scene_from
 
 
 def bad(data, match):

@@ -5,7 +5,7 @@ import pytest
 
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import demo_data, scene_from
+from ngfrac.testing.scenes import demo_data, scene_from
 
 EPS = 0.04
 

@@ -4,7 +4,7 @@ import pytest
 
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from scenes import quick_slit
+from ngfrac.testing.scenes import quick_slit
 
 HELD = ['loads.0.value="1.0"', 'loads.1.value="-1.0"', "time.t_end=0.04"]
 

@@ -121,3 +121,18 @@ def test_the_tip_never_moves_back_along_the_crack(square):
     found = find_crack(graph, z, [SLIT], np.array(SLIT[-1]), BAND, bin_width=2 * EPS,
                        previous_tip=behind)
     assert found.tip[0] > 0.6
+
+
+def test_node_graph_joins_by_element_or_by_sub_simplex(square):
+    nodes, graph = square
+    mesh = nodes.fes.mesh
+    lattice = NodeGraph(mesh, nodes, joined="sub-simplices")
+    if nodes.order == 1:  # both are the mesh edges
+        np.testing.assert_array_equal(graph.edges, lattice.edges)
+    else:  # an element joins all its nodes: the sub-simplex edges and more
+        assert len(graph.edges) > len(lattice.edges)
+        both = {tuple(e) for e in graph.edges}
+        assert all(tuple(e) in both for e in lattice.edges)
+    assert len(graph.edges) == graph.graph.nnz // 2
+    with pytest.raises(ValueError, match="joined"):
+        NodeGraph(mesh, nodes, joined="faces")

@@ -6,7 +6,7 @@ import meshio
 import numpy as np
 import pytest
 
-from ngfrac.post.diagnostics import element_sizes
+from ngfrac.post.diagnostics import element_diameters
 from ngfrac.io.output import LARGE_SNAPSHOT, VTKSeries
 from ngfrac.runner import write_snapshot
 from ngfrac.scene import Scene
@@ -98,7 +98,7 @@ def test_element_fields_are_one_value_per_element(tmp_path):
     stepper, mesh = _snapshot(tmp_path, _uniform_scene("mode3"))
     # subdivision 0: NGSolve writes each triangle's three corners on their own, in element order
     h = mesh.point_data["h"].reshape(stepper.mesh.ne, 3)
-    np.testing.assert_array_equal(h, np.repeat(element_sizes(stepper.mesh)[:, None], 3, axis=1))
+    np.testing.assert_array_equal(h, np.repeat(element_diameters(stepper.mesh)[:, None], 3, axis=1))
     estimator = mesh.point_data["estimator"].reshape(stepper.mesh.ne, 3)
     assert np.all(estimator == estimator[:, :1])
     assert np.all(np.isfinite(estimator)) and np.all(estimator >= 0)
