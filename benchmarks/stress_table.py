@@ -19,17 +19,16 @@ from pathlib import Path
 import ngsolve as ngs
 import numpy as np
 import ngfrac
-from ngfrac.solve.stepper import PhaseFieldStepper
 from ngfrac.testing import stress_cases as sc
 
 THREE_D = "three_d"
 """The 3D case of tests/stress/test_stress_3d.py (a unit cube pulled apart, P1)."""
 
 
-def _patch(name, function):
-    original = getattr(PhaseFieldStepper, name)
-    setattr(PhaseFieldStepper, name, function)
-    return lambda: setattr(PhaseFieldStepper, name, original)
+def _patch(cls, name, function):
+    original = getattr(cls, name)
+    setattr(cls, name, function)
+    return lambda: setattr(cls, name, original)
 
 
 def _number(value: float) -> str:

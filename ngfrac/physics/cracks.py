@@ -132,7 +132,8 @@ def crack_direction(points: np.ndarray, z_values: np.ndarray, tip: np.ndarray, r
 
     Parameters
     ----------
-    points, z_values : node coordinates (n, d) and node values of z
+    points, z_values : numpy.ndarray
+        Node coordinates (n, d) and the node values of z.
     tip : (d,) array
     radius : float
         How far behind the tip to look (a few epsilon).

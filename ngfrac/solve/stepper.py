@@ -41,7 +41,7 @@ from .time_control import StepSizeControl
 from .u_problem import DisplacementProblem, SolverError
 from .z_problem import PhaseFieldProblem
 
-__all__ = ["PhaseFieldStepper", "SolverError", "StepRecord"]
+__all__ = ["PhaseFieldStepper"]
 
 
 class PhaseFieldStepper:

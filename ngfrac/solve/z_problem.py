@@ -45,9 +45,8 @@ class PhaseFieldProblem:
 
     def __init__(self, fields: MeshFields, scene: Scene, crack_model: CrackModel, gamma: Any,
                  drive: ngs.CoefficientFunction, context: StepContext) -> None:
-        self.fields = fields
-        self.threads, self.timer, inv_dt = context.threads, context.timer, context.inv_dt
-        self.inv_dt = inv_dt
+        self.fields, self.context = fields, context
+        inv_dt = context.inv_dt
         pf = scene.phase_field
         self.alpha2, self.solver = pf.alpha2, scene.discretization.z_solver
         self.descent = scene.discretization.z_update == "descent"
@@ -71,10 +70,10 @@ class PhaseFieldProblem:
     def solve(self, step: int | str = "?") -> int:
         """The z-sub-step into :attr:`z_trial`; returns the CG iterations (0 for a direct
         solve). Raises :class:`SolverError`."""
-        with self.timer.phase("z: assemble"), parallel():
+        with self.context.timer.phase("z: assemble"), parallel():
             self._assemble_matrix()
             self.f_z.Assemble()
-        with self.timer.phase("z: solve"), self.threads.solves():
+        with self.context.timer.phase("z: solve"), self.context.threads.solves():
             iterations = self._solve_system(step)
         if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
             raise SolverError(f"the z-solve gave non-finite values at step {step}; lower time.dt")
@@ -91,7 +90,7 @@ class PhaseFieldProblem:
         k, m = self._k.mat.AsVector(), self._m.mat.AsVector()
         if not (len(values) == len(k) == len(m)):  # never seen; the forms share fes_z
             raise RuntimeError("the z-forms do not share a sparsity pattern")
-        values.data += k + (self.alpha2 * self.inv_dt.Get()) * m
+        values.data += k + (self.alpha2 * self.context.inv_dt.Get()) * m
 
     def _solve_system(self, step: int | str) -> int:
         fes, z = self.fields.fes_z, self.fields.z
@@ -147,5 +146,5 @@ class PhaseFieldProblem:
         theta = 1.0 if curvature <= 0 else min(1.0, max(0.0, -slope / curvature))
         if theta < 1.0:
             self.shortened += 1
-            self.timer.add("z: shortened projections", 0.0)
+            self.context.timer.add("z: shortened projections", 0.0)
         return old + theta * direction_nodes

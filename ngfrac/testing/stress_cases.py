@@ -15,7 +15,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 import ngsolve as ngs
@@ -25,6 +25,8 @@ from ..physics.cracks import optimal_profile
 from ..runner import CHECKPOINT, run_scene
 from ..scene import Components, Scene
 from ..solve.stepper import PhaseFieldStepper, SolverError
+from ..solve.u_problem import DisplacementProblem
+from ..solve.z_problem import PhaseFieldProblem
 
 from .scenes import demo_data, scene_from
 
@@ -481,35 +483,35 @@ def failure_scene() -> Scene:
     return slit(*mode3_load(RAMP_HOLD), *FAILURE_SCENE)
 
 
-def _failing(stepper: PhaseFieldStepper) -> bool:
-    """Whether the stepper is solving step FAIL_AT (its time parameter is t_FAIL_AT)."""
-    dt = stepper.scene.time.dt
-    return abs(stepper.time.Get() - FAIL_AT * dt) < 0.5 * dt
+def _failing(time: Any) -> bool:
+    """Whether the step being solved is step FAIL_AT (the step's time Parameter is t_FAIL_AT)."""
+    dt = failure_scene().time.dt
+    return abs(time.Get() - FAIL_AT * dt) < 0.5 * dt
 
 
-def poison(sub_step: str) -> tuple[str, Callable]:
-    """(method name, replacement) making the u- or z-solve of step FAIL_AT produce NaN.
+def poison(sub_step: str) -> tuple[type, str, Callable]:
+    """(class, method name, replacement) making the u- or z-solve of step FAIL_AT produce NaN.
 
-    The NaN goes in below the stepper's own finiteness check, so the error raised is the
+    The NaN goes in below the sub-problem's own finiteness check, so the error raised is the
     library's: a Dirichlet value (u) or the z-solve's result (z).
     """
     if sub_step == "u":
-        original = PhaseFieldStepper._apply_boundary_values
+        original = DisplacementProblem.apply_boundary_values
 
         def apply_boundary_values(self):
             original(self)
-            if _failing(self):
-                fixed = ~np.array(self.fes_u.FreeDofs(), dtype=bool)
-                self.u.vec.FV().NumPy()[fixed] = math.nan
-        return "_apply_boundary_values", apply_boundary_values
-    original_z = PhaseFieldStepper._solve_z_system
+            if _failing(self.context.time):
+                fixed = ~np.array(self.fields.fes_u.FreeDofs(), dtype=bool)
+                self.fields.u.vec.FV().NumPy()[fixed] = math.nan
+        return DisplacementProblem, "apply_boundary_values", apply_boundary_values
+    original_system = PhaseFieldProblem._solve_system
 
-    def solve_z_system(self):
-        iterations = original_z(self)
-        if _failing(self):
+    def solve_system(self, step):
+        iterations = original_system(self, step)
+        if _failing(self.context.time):
             self.z_trial.vec[:] = math.nan
         return iterations
-    return "_solve_z_system", solve_z_system
+    return PhaseFieldProblem, "_solve_system", solve_system
 
 
 @dataclass(frozen=True)
@@ -524,12 +526,12 @@ class FailureResult:
     wall_s: float
 
 
-def run_failure(sub_step: str, folder: Path, patch: Callable[[str, Callable], Callable[[], None]]
-                ) -> FailureResult:
+def run_failure(sub_step: str, folder: Path,
+                patch: Callable[[type, str, Callable], Callable[[], None]]) -> FailureResult:
     """Run the failure scene with ``run_scene`` and the poisoned sub-step, then restart it.
 
-    ``patch(name, function)`` installs the replacement on PhaseFieldStepper and returns an
-    undo (pytest's monkeypatch in the tests, a plain setattr in the benchmark).
+    ``patch(cls, name, function)`` installs the replacement on the sub-problem's class and
+    returns an undo (pytest's monkeypatch in the tests, a plain setattr in the benchmark).
     """
     scene = failure_scene()
     started = time.perf_counter()

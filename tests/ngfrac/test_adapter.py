@@ -85,8 +85,7 @@ def test_tip_stops_being_chased_once_it_reached_the_boundary(slit_state):
     values = nodes.values(z)
     adapter.remember(mesh, nodes, values, np.array([0.7, 0.5]))
     assert not adapter.tip_stopped
-    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.52]))
-    assert adapter.reason == "tip moved"
+    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.52])) == "tip moved"
     adapter.remember(mesh, nodes, values, np.array([1.0, 0.52]))
     assert adapter.tip_stopped
     # the farthest cracked node now wanders along the edge: no new mesh for that, and the
@@ -112,8 +111,7 @@ def test_a_tip_that_reaches_the_boundary_between_changes_asks_for_one_last_mesh(
     adapter = MeshAdapter(scene)
     values = nodes.values(z)
     adapter.remember(mesh, nodes, values, np.array([0.97, 0.5]))  # less than tip_margin/2 away
-    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.5]))
-    assert adapter.reason == "tip reached the boundary"
+    assert adapter.wants_new_mesh(mesh, nodes, values, np.array([1.0, 0.5])) == "tip reached the boundary"
     adapter.remember(mesh, nodes, values, np.array([1.0, 0.5]))
     assert adapter.tip_stopped
 

@@ -24,9 +24,9 @@ class TransferWatch:
         self.worst_decrease = 0.0
         stepper.adapt = self
 
-    def __call__(self, tip=None):
+    def __call__(self, tip=None, reason="requested"):
         z_old = self.stepper.z
-        record = self.original(tip)
+        record = self.original(tip, reason)
         new_nodes = self.stepper.nodes
         before = evaluate(z_old, locate(z_old.space.mesh, new_nodes.points))
         after = new_nodes.values(self.stepper.z)

@@ -6,7 +6,6 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.runner import CHECKPOINT
-from ngfrac.solve.stepper import PhaseFieldStepper
 
 from ngfrac.testing import stress_cases as sc
 
@@ -26,8 +25,8 @@ def failure(request, tmp_path_factory):
     then a restart from the checkpoint (see stress_cases.run_failure)."""
     patches = pytest.MonkeyPatch()
 
-    def patch(name, function):
-        patches.setattr(PhaseFieldStepper, name, function)
+    def patch(cls, name, function):
+        patches.setattr(cls, name, function)
         return patches.undo
 
     folder = tmp_path_factory.mktemp(f"failure_{request.param}") / "run"
