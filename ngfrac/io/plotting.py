@@ -150,12 +150,11 @@ def plot_mesh(coordinates: np.ndarray, cells: np.ndarray, png: str | Path, title
 
 
 def plot_tip_path(history: dict[str, np.ndarray], png: str | Path,
-                  domain: tuple[tuple[float, float], tuple[float, float]] | None = None,
-                  title: str = "") -> Path | None:
+                  outline: np.ndarray | None = None, title: str = "") -> Path | None:
     """The tip positions of a history (tip_x, tip_y) over the domain, colored by t.
 
-    ``domain`` is ((x0, y0), (width, height)), drawn as the outline (3D: the x-y projection).
-    Returns None when no row has a tip.
+    ``outline`` holds segments (k, 2, 2) of the domain's boundary in the x-y plane
+    (:func:`boundary_outline`), drawn in grey. Returns None when no row has a tip.
     """
     points = np.column_stack([history["tip_x"], history["tip_y"], history["t"]])
     points = points[np.all(np.isfinite(points), axis=1)]
@@ -163,10 +162,10 @@ def plot_tip_path(history: dict[str, np.ndarray], png: str | Path,
         return None
     fig = new_figure(figsize=(6, 5.2), constrained_layout=True)
     ax = fig.subplots()
-    if domain is not None:
-        (x0, y0), (width, height) = domain
-        ax.plot([x0, x0 + width, x0 + width, x0, x0], [y0, y0, y0 + height, y0 + height, y0],
-                color="0.3", lw=1)
+    if outline is not None and len(outline):
+        from matplotlib.collections import LineCollection
+
+        ax.add_collection(LineCollection(outline, colors="0.3", linewidths=1))
     ax.plot(points[:, 0], points[:, 1], color="0.7", lw=0.6, zorder=1)
     dots = ax.scatter(points[:, 0], points[:, 1], c=points[:, 2], s=8, cmap="viridis", zorder=2)
     fig.colorbar(dots, ax=ax, label="t")
@@ -174,6 +173,17 @@ def plot_tip_path(history: dict[str, np.ndarray], png: str | Path,
     ax.set(xlabel="x", ylabel="y", title=title or "tip path")
     fig.savefig(png, dpi=130)
     return Path(png)
+
+
+def boundary_outline(coordinates: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """The boundary of a mesh as x-y segments (k, 2, 2): its boundary edges in 2D (any domain
+    shape, the crack edges included), the edges of its boundary triangles seen from above in
+    3D."""
+    facets = np.asarray(facets)
+    if facets.shape[1] == 3:  # 3D: the triangles' edges
+        facets = np.unique(np.sort(np.concatenate([facets[:, [0, 1]], facets[:, [1, 2]],
+                                                   facets[:, [0, 2]]]), axis=1), axis=0)
+    return np.asarray(coordinates)[facets][:, :, :2]
 
 
 def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]:
@@ -194,11 +204,11 @@ def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]
         written.append(fd)
     results_file = folder / "results.h5"
     results = open_results(results_file) if results_file.exists() else None
-    domain = None
-    if results is not None:
-        g = results.scene.geometry
-        domain = ((g.origin[0], g.origin[1]), (g.width, g.height))
-    tips = plot_tip_path(history, out / "tip_path.png", domain)
+    outline = None
+    if results is not None and len(results.snapshot_times()):
+        arrays = results.snapshot(-1).mesh_arrays
+        outline = boundary_outline(arrays.coordinates, arrays.facets)
+    tips = plot_tip_path(history, out / "tip_path.png", outline)
     if tips is not None:
         written.append(tips)
     if results is None:
