@@ -3,7 +3,7 @@
     python benchmarks/meshing_cost.py [--quick] [--threads N]
 
 Two markdown tables (formerly the slow tests ``test_benchmark_numbers`` and
-``test_benchmark_bisection_against_regeneration`` of tests/ngfrac/test_meshing.py):
+``test_benchmark_bisection_against_regeneration`` of tests/mesh/test_meshing.py):
 
 1. a band of width 4 epsilon (epsilon 0.01) along a half slit at h_band = epsilon/2, /3, /4,
    three mesh changes each: the vertices delivered, their ratio ``c`` to the predicted count

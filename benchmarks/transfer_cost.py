@@ -3,7 +3,7 @@
     python benchmarks/transfer_cost.py [--quick] [--threads N]
 
 A markdown table (formerly the slow test ``test_benchmark_transfer`` of
-tests/ngfrac/test_transfer.py): the optimal profile z = exp(-d/epsilon) of a half slit
+tests/mesh/test_transfer.py): the optimal profile z = exp(-d/epsilon) of a half slit
 (epsilon 0.02) on a P2 mesh graded to the crack, moved to a second graded mesh of about
 5,000 vertices; the time of ``transfer_phase_field`` and of ``transfer(u)`` by ``set``
 (NGSolve's interpolation) and by ``nodes`` (evaluation at the Lagrange nodes). ``--quick``

@@ -2,7 +2,7 @@
 set, caps NGSolve's threads for the whole session (importing ngfrac does not).
 
 tests/ is a package (tests/__init__.py), so pytest puts the checkout on sys.path, not tests/:
-with tests/ there, the folders tests/ngfrac and tests/estimators shadowed the ngfrac and
+with tests/ there, the folders tests/ngfrac (since moved) and tests/estimators shadowed the ngfrac and
 estimators packages as namespace packages (``pytest`` run from an installed entry point then
 imported the installed checkout's ngfrac, whatever the working tree). Shared scenes are in
 :mod:`ngfrac.testing`."""

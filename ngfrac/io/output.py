@@ -284,11 +284,14 @@ class VTKSeries:
 
     manifest : Manifest, optional
         Where each file is listed before it is written (``folder`` must be inside its folder).
+    large : int
+        Warn once when a snapshot's estimated size exceeds this many bytes.
     """
 
     def __init__(self, folder: Path, subdivision: int, stem: str = "fields",
-                 manifest: Manifest | None = None) -> None:
+                 manifest: Manifest | None = None, large: int = LARGE_SNAPSHOT) -> None:
         self.folder = folder
+        self.large = large
         self.subdivision = subdivision
         self.stem = stem
         self.manifest = manifest
@@ -337,7 +340,7 @@ class VTKSeries:
         writing a file that :meth:`estimate_bytes` puts above :data:`LARGE_SNAPSHOT` bytes.
         """
         size = self.estimate_bytes(mesh, sum(cf.dim for cf in fields.values()))
-        if size > LARGE_SNAPSHOT and not self._warned:
+        if size > self.large and not self._warned:
             self._warned = True  # once per series: adaptive meshes change the size every time
             warnings.warn(f"a VTK snapshot of {mesh.ne} elements at subdivision "
                           f"{self.subdivision} will take about {size / 1e6:.0f} MB per file; "

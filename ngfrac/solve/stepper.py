@@ -22,7 +22,7 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import Adaptation, MeshAdapter
-from ..mesh.domains import Domain, build_mesh, domain_of
+from ..mesh.domains import Domain, domain_of
 from ..physics.crack_models import crack_model
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.elastic import make_model
@@ -91,7 +91,7 @@ class PhaseFieldStepper:
             self.load_state(state)
             return
         size = self.adapter.sizes.hmax if self.adapter else scene.mesh_size
-        self._initial_state(mesh if mesh is not None else build_mesh(scene.geometry, size, polylines))
+        self._initial_state(mesh if mesh is not None else self.domain.build_mesh(size, polylines))
         if self.adapter is not None and mesh is None:
             self.fields = self.adapter.resolve_initial(self.fields, lambda f: self.tip(),
                                                        self._initial_state, self.threads.solves)

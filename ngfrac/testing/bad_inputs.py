@@ -1,5 +1,5 @@
-"""Bad scene inputs, each with the one-line message it must give (tests/ngfrac/test_checks.py
-checks them on the API, tests/ngfrac/test_cli.py on the command line)."""
+"""Bad scene inputs, each with the one-line message it must give (tests/scene/test_checks.py
+checks them on the API, tests/io/test_cli.py on the command line)."""
 from __future__ import annotations
 
 import copy

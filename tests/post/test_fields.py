@@ -187,12 +187,9 @@ def test_3d_stress_von_mises_principal(tmp_path):
                                rtol=RTOL)
 
 
-def test_size_warning_once_per_series(tmp_path, monkeypatch):
-    import ngfrac.io.output
-
-    monkeypatch.setattr(ngfrac.io.output, "LARGE_SNAPSHOT", 1000)  # every snapshot is "large"
+def test_size_warning_once_per_series(tmp_path):
     stepper = PhaseFieldStepper(_uniform_scene("mode3"))
-    series = VTKSeries(tmp_path, 0)
+    series = VTKSeries(tmp_path, 0, large=1000)  # every snapshot is "large"
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         write_snapshot(series, stepper)

@@ -1,5 +1,5 @@
 """Scene checks beyond single keys: crack geometry Netgen cannot mesh, non-finite expressions,
-resolution warnings (API side; tests/ngfrac/test_cli.py has the command line)."""
+resolution warnings (API side; tests/io/test_cli.py has the command line)."""
 import warnings
 
 import pytest

@@ -7,8 +7,7 @@ from pathlib import Path
 import pytest
 
 from ngfrac import cli
-from ngfrac.solve import stepper as stepper_module
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.mesh.domains import Rectangle
 
 from ngfrac.testing.bad_inputs import ALL_CASES, bad_scene_file
 
@@ -154,10 +153,12 @@ def test_repeated_crack_point_no_longer_segfaults(earlier_run, tmp_path):
 def test_meshing_failure_during_the_run_exits_3_in_one_line(tmp_path, monkeypatch, capfd):
     """A Netgen failure (here forced: a crack that runs back, behind the scene's checks) is a
     MeshingError: one line, exit 3."""
-    def failing(geometry, maxh, cracks):
-        return build_mesh(geometry, maxh, [[[0.0, 0.5], [0.3, 0.5], [0.1, 0.5]]])
+    original = Rectangle.build_mesh
 
-    monkeypatch.setattr(stepper_module, "build_mesh", failing)
+    def failing(self, maxh, cracks=()):
+        return original(self, maxh, [[[0.0, 0.5], [0.3, 0.5], [0.1, 0.5]]])
+
+    monkeypatch.setattr(Rectangle, "build_mesh", failing)
     code = cli.main(["run", SLIT, "--out", str(tmp_path / "run"), *QUICK, "--no-plots",
                      "--set", "adaptivity.enabled=false"])
     assert code == 3
