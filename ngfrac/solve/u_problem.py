@@ -20,7 +20,7 @@ from ..physics.splits import NewtonResult, NewtonSolver, make_split, tangent_int
 from ..scene import Scene
 from .linear import UOperator, register_preconditioner
 from .context import StepContext
-from .spaces import MeshFields
+from .spaces import MeshFields, dx_of_order
 
 
 class SolverError(RuntimeError):
@@ -67,7 +67,9 @@ class DisplacementProblem:
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
                     if pf.alpha1 > 0 else None)
         self.body_force = model.body_force(scene.material, time)
-        self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
+        # a body force is any expression: its quadrature keeps two orders above the forms'
+        dx_f = dx_of_order(fields.mesh, fields.integration_order + 2)
+        self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx_f)
         self._newton = self._newton_solver(pf.alpha1) if self.split is not None else None
         self.indicators: dict = {}
         """Reaction test functions of this mesh (:func:`ngfrac.post.reactions.reaction`)."""
