@@ -140,6 +140,23 @@ def boundary_segment(points: Sequence[Sequence[float]], sides: Mapping[str, tupl
     return None
 
 
+def boundary_segment_of(points: Sequence[Sequence[float]], domain: "Domain",
+                        tol: float) -> tuple[int, str] | None:
+    """As :func:`boundary_segment` for any domain with ``boundary_name(point, tol)``: a
+    segment (2D) or the polygon (3D) whose ends and middle (corners and centre) lie on one
+    named boundary part."""
+    p = np.asarray(points, dtype=float)
+    if p.shape[1] == 3:
+        probes = [*p, p.mean(axis=0)]
+        names = {domain.boundary_name(q, tol) for q in probes}
+        return (-1, names.pop()) if len(names) == 1 and None not in names else None
+    for k in range(len(p) - 1):
+        names = {domain.boundary_name(q, tol) for q in (p[k], 0.5 * (p[k] + p[k + 1]), p[k + 1])}
+        if len(names) == 1 and None not in names:
+            return k, names.pop()
+    return None
+
+
 def _plane_coordinates(corners: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """2D coordinates of points in the plane through corners[0] with the given normal."""
     e1 = corners[1] - corners[0]
@@ -245,14 +262,15 @@ def crack_problems(geometry: "Geometry", cracks: Sequence[Sequence[Sequence[floa
     """
     domain = _domain(geometry)
     tol = SAME_POINT * domain.diameter
-    sides = domain.sides()
+    sides = domain.sides() if hasattr(domain, "sides") else None  # axis-aligned: exact sides
     for i, crack in enumerate(cracks):
         problem = (polyline_problem(crack, tol) if geometry.dim == 2
                    else polygon_problem(crack, normals[i], tol))
         if problem:
             yield f"cracks[{i}]: {problem}"
             continue
-        on_side = boundary_segment(crack, sides, tol)
+        on_side = (boundary_segment(crack, sides, tol) if sides is not None
+                   else boundary_segment_of(crack, domain, tol))
         if on_side:
             k, name = on_side
             what = f"segment {k}" if k >= 0 else "the polygon"
