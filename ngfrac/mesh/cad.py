@@ -83,12 +83,16 @@ class OccDomain:
         pad = 1e-7  # OCC's bounding boxes are enlarged by its tolerance
         self._low = np.array([box[0][k] + pad for k in range(self._dim)])
         self._high = np.array([box[1][k] - pad for k in range(self._dim)])
+        if self._dim == 2 and max(abs(box[0][2]), abs(box[1][2])) > 1e-6 * max(
+                1.0, float(np.linalg.norm(self._high - self._low))):
+            raise ValueError("a 2D OCC domain must lie in the plane z = 0")
         self._parts = _sub_parts(shape, self._dim)
         for part in self._parts:
             if not part.name:
                 part.name = default_name
         self._boundary = None
         self._locator: ngs.Mesh | None = None
+        self._curved: bool | None = None
 
     def __repr__(self) -> str:
         return f"OccDomain({self._dim}D, boundaries {', '.join(self.boundary_names)})"
@@ -133,7 +137,9 @@ class OccDomain:
     @property
     def curved(self) -> bool:
         """Whether a boundary edge (face) is curved, so that meshes should be curved."""
-        return any(not _is_flat(part, self._dim) for part in self._parts)
+        if self._curved is None:
+            self._curved = any(not _is_flat(part, self._dim) for part in self._parts)
+        return self._curved
 
     # -- Netgen ----------------------------------------------------------------------------------
 
@@ -379,15 +385,15 @@ def shape_from_specs(specs: Iterable[Any]) -> Any:
     return shape.UnifySameDomain()
 
 
-def read_shape(path: str | Path, scale: float = 1.0, dim: int = 0) -> Any:
+def read_shape(path: str | Path, scale: float = 1.0) -> Any:
     """The shape of a STEP, BREP or IGES file (names of edges and faces kept), times
-    ``scale`` about the origin. ``dim = 2`` reads a 2D file (faces in z = 0)."""
+    ``scale`` about the origin. A file without solids is a 2D domain (faces in z = 0)."""
     from netgen import occ
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no CAD file {str(path)!r}")
-    shape = occ.OCCGeometry(str(path), dim=dim or 3).shape
+    shape = occ.OCCGeometry(str(path)).shape
     if scale != 1.0:
         shape = shape.Scale(occ.Pnt(0, 0, 0), scale)
     return shape

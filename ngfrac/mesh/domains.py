@@ -381,7 +381,7 @@ def occ_domain_of(geometry: Geometry) -> Domain:
     from .cad import BoundaryConflict, name_boundaries, read_shape, shape_from_specs
 
     try:
-        shape = (read_shape(geometry.file, geometry.scale, geometry.file_dim) if geometry.file
+        shape = (read_shape(geometry.file, geometry.scale) if geometry.file
                  else shape_from_specs(geometry.shapes))
     except FileNotFoundError as err:
         raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None

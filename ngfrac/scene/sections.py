@@ -520,6 +520,22 @@ class Geometry(_Section):
             object.__setattr__(self, "_domain", built)
         return built
 
+    IN_CODE: ClassVar[str] = "<shape in code>"
+    """The ``file`` of a geometry made by :meth:`of_domain`."""
+
+    @classmethod
+    def of_domain(cls, domain: "Domain", mesh_size: float = 0.0) -> "Geometry":
+        """An occ geometry section for a domain built in code (an
+        :class:`~ngfrac.mesh.cad.OccDomain` of any netgen.occ shape), for a :class:`Scene`.
+
+        Its ``file`` is :attr:`IN_CODE`: such a scene cannot be written to and read from TOML,
+        and ``dataclasses.replace`` of this section loses the domain (that of the scene keeps it).
+        """
+        geometry = cls.__new__(cls)
+        object.__setattr__(geometry, "_domain", domain)
+        cls.__init__(geometry, kind="occ", file=cls.IN_CODE, mesh_size=mesh_size)
+        return geometry
+
     def to_dict(self) -> dict[str, Any]:
         """The keys as a scene file writes them: no occ keys for a rectangle or box, none of
         a shape's or selector's keys at their defaults."""

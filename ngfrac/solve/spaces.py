@@ -35,11 +35,16 @@ class MeshFields:
     def on(cls, mesh: ngs.Mesh, scene: Scene, model: Any) -> "MeshFields":
         """Spaces and zero fields on ``mesh`` for ``scene`` and its elastic ``model``.
 
+        On an occ domain with a curved boundary and order >= 2 the mesh is curved
+        (``mesh.Curve(order)``) first.
+
         One quadrature, exact for constant toughness, in every form and energy
         (2 order_u + 2 order_z): the u-step then minimizes exactly the energy that the
         diagnostics report.
         """
         disc = scene.discretization
+        if disc.order >= 2 and scene.geometry.kind == "occ" and scene.geometry.domain().curved:
+            mesh.Curve(disc.order)  # curved boundaries (ngfrac.mesh.cad): isoparametric u
         fes_u = model.space(mesh, disc.order, scene.loads)
         fes_z = ngs.H1(mesh, order=disc.z_order)
         order = 2 * disc.order + 2 * disc.z_order
