@@ -217,16 +217,14 @@ class OccDomain:
         tol = BOUNDARY_TOL * self.diameter if tol is None else tol
         return self.distance_to_boundary(point) <= tol
 
-    def boundary_name(self, point: Sequence[float], tol: float | None = None) -> str | None:
-        """The name of the boundary part within ``tol`` of a point (None: not on the boundary)."""
+    def boundary_names_at(self, point: Sequence[float], tol: float | None = None) -> set[str]:
+        """The names of the boundary parts within ``tol`` of a point (a corner may have
+        several; none off the boundary)."""
         from netgen import occ
 
         tol = BOUNDARY_TOL * self.diameter if tol is None else tol
         vertex = occ.Vertex(_pnt(point[: self._dim]))
-        for part in self._parts:
-            if part.Distance(vertex) <= tol:
-                return part.name
-        return None
+        return {part.name for part in self._parts if part.Distance(vertex) <= tol}
 
     def contains(self, points: Any, tol: float = 0.0) -> Any:
         """Whether a point (d,) or points (n, d) lie in the closed domain, within ``tol``."""
@@ -461,4 +459,4 @@ def name_boundaries(shape: Any, selectors: Sequence[Any], default_name: str = DE
             chosen[part] = (name, j)
     for part in parts:
         part.name = chosen[part][0] if part in chosen else (file_names[part] or default_name)
-    return OccDomain(shape, default_name)
+    return probe  # its names are the parts' (now set); it keeps what it has computed

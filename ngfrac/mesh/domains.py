@@ -364,7 +364,7 @@ def domain_of(geometry: Geometry | Domain) -> Domain:
     if geometry.kind == "rectangle":
         return Rectangle(geometry.width, geometry.height, tuple(geometry.origin))
     if geometry.kind == "occ":
-        return occ_domain_of(geometry)
+        return geometry.domain()  # built once per section (OCC work), kept there
     raise ValueError(f"no domain for geometry.kind = {geometry.kind!r}")
 
 

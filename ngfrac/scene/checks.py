@@ -142,18 +142,22 @@ def boundary_segment(points: Sequence[Sequence[float]], sides: Mapping[str, tupl
 
 def boundary_segment_of(points: Sequence[Sequence[float]], domain: "Domain",
                         tol: float) -> tuple[int, str] | None:
-    """As :func:`boundary_segment` for any domain with ``boundary_name(point, tol)``: a
-    segment (2D) or the polygon (3D) whose ends and middle (corners and centre) lie on one
-    named boundary part."""
+    """As :func:`boundary_segment` for any domain with ``boundary_names_at(point, tol)``: a
+    segment (2D) or the polygon (3D) whose ends and middle (corners and centre) all lie on
+    one named boundary part."""
     p = np.asarray(points, dtype=float)
+
+    def common(probes: Sequence[np.ndarray]) -> str | None:
+        names = set.intersection(*(domain.boundary_names_at(q, tol) for q in probes))
+        return min(names) if names else None
+
     if p.shape[1] == 3:
-        probes = [*p, p.mean(axis=0)]
-        names = {domain.boundary_name(q, tol) for q in probes}
-        return (-1, names.pop()) if len(names) == 1 and None not in names else None
+        name = common([*p, p.mean(axis=0)])
+        return (-1, name) if name else None
     for k in range(len(p) - 1):
-        names = {domain.boundary_name(q, tol) for q in (p[k], 0.5 * (p[k] + p[k + 1]), p[k + 1])}
-        if len(names) == 1 and None not in names:
-            return k, names.pop()
+        name = common([p[k], 0.5 * (p[k] + p[k + 1]), p[k + 1]])
+        if name:
+            return k, name
     return None
 
 

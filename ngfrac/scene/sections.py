@@ -510,13 +510,13 @@ class Geometry(_Section):
         """The domain this section describes (:func:`ngfrac.mesh.domains.domain_of`): its
         boundary and containment tests, measure and sample points live there. An occ domain
         is built once per section (OCC work) and kept."""
-        from ..mesh.domains import domain_of
+        from ..mesh.domains import domain_of, occ_domain_of
 
         if self.kind != "occ":
             return domain_of(self)
         built = self.__dict__.get("_domain")
         if built is None:
-            built = domain_of(self)
+            built = occ_domain_of(self)
             object.__setattr__(self, "_domain", built)
         return built
 

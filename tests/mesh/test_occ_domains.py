@@ -206,3 +206,19 @@ t_end = 0.1
     assert result.returncode == 2, result.stderr
     assert "matches no edge" in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_scene_checks_work_through_the_occ_domain():
+    data = plate_scene().to_dict()
+    assert Scene.from_dict(data).geometry.boundary_names == plate().boundary_names  # round trip
+    along = {**data, "cracks": [{"points": [[0.2, 0.0], [0.8, 0.0]]}]}
+    with pytest.raises(SceneError, match="lies on the boundary 'bottom'"):
+        Scene.from_dict(along)
+    into_hole = {**data, "cracks": [{"points": [[0.0, 0.5], [1.0, 0.5]]}]}
+    with pytest.raises(SceneError, match="lies outside the domain"):
+        Scene.from_dict(into_hole)
+    unknown = {**data, "loads": [{"boundary": "left", "value": "t"}]}
+    with pytest.raises(SceneError, match="boundaries are bottom, .*hole"):
+        Scene.from_dict(unknown)
+    nucleation = Scene.from_dict({**data, "cracks": []})
+    assert nucleation.geometry.domain().build_mesh(0.2).GetBoundaries()
