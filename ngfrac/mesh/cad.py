@@ -353,7 +353,10 @@ def _primitive(spec: Any) -> Any:
             return plane.Direction(0, 1).Ellipse(b, a).Face()
         return plane.Ellipse(a, b).Face()
     if kind == "polygon":
-        return occ.MakePolygon([_pnt(p) for p in spec.points]).Face()
+        plane = occ.WorkPlane().MoveTo(*spec.points[0])
+        for point in spec.points[1:]:
+            plane = plane.LineTo(*point)
+        return plane.Close().Face()
     if kind == "box":
         corner = np.asarray(spec.corner, dtype=float)
         return occ.Box(_pnt(corner), _pnt(corner + np.asarray(spec.size, dtype=float)))

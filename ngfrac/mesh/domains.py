@@ -387,7 +387,8 @@ def occ_domain_of(geometry: Geometry) -> Domain:
         raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None
     except Exception as err:  # OCC raises plain Exceptions for bad shapes or files
         what = f"file = {geometry.file!r}" if geometry.file else "shapes"
-        raise SceneError(f"geometry.{what}: OCC could not build the shape ({err})") from None
+        text = " ".join(str(err).split())  # one line: OCC's messages span several
+        raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
     try:
         return name_boundaries(shape, geometry.boundaries, geometry.default_boundary)
     except BoundaryConflict as err:

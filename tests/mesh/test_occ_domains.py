@@ -222,3 +222,54 @@ def test_scene_checks_work_through_the_occ_domain():
         Scene.from_dict(unknown)
     nucleation = Scene.from_dict({**data, "cracks": []})
     assert nucleation.geometry.domain().build_mesh(0.2).GetBoundaries()
+
+
+@pytest.mark.parametrize("shapes, measure", [
+    ([{"type": "ellipse", "center": [0, 0], "radii": [0.5, 0.2]}], math.pi * 0.1),
+    ([{"type": "ellipse", "center": [1, 1], "radii": [0.2, 0.5]}], math.pi * 0.1),
+    ([{"type": "polygon", "points": [[0, 0], [1, 0], [0, 1]]}], 0.5),
+    ([{"type": "rectangle", "corner": [0, 0], "size": [1, 1]},
+      {"type": "circle", "center": [0, 0], "radius": 1, "op": "intersect"}], math.pi / 4),
+    ([{"type": "rectangle", "corner": [0, 0], "size": [1, 1]},   # a V-notch from the left edge
+      {"type": "polygon", "points": [[0, 0.4], [0.3, 0.5], [0, 0.6]], "op": "cut"}], 1 - 0.03),
+    ([{"type": "sphere", "center": [0, 0, 0], "radius": 0.5}], math.pi / 6),
+])
+def test_shape_types_and_ops_have_their_measure(shapes, measure):
+    domain = Geometry(kind="occ", shapes=shapes).domain()
+    assert domain.measure == pytest.approx(measure, rel=1e-9)
+    mesh = domain.build_mesh(0.25)
+    assert mesh.dim == domain.dim and set(mesh.GetBoundaries()) == {"free"}
+
+
+def test_bad_shapes_are_scene_errors():
+    with pytest.raises(SceneError, match=r"geometry.shapes\[0\].radius .* a rectangle takes corner, size"):
+        Geometry(kind="occ", shapes=[{"type": "rectangle", "corner": [0, 0], "size": [1, 1], "radius": 1}])
+    with pytest.raises(SceneError, match="mix no plane shapes"):
+        Geometry(kind="occ", shapes=[{"type": "rectangle", "corner": [0, 0], "size": [1, 1]},
+                                     {"type": "sphere", "center": [0, 0, 0], "radius": 1, "op": "cut"}])
+    with pytest.raises(SceneError, match="not both"):
+        Geometry(kind="occ")
+    with pytest.raises(SceneError, match="only geometry.kind = 'occ' takes it"):
+        Geometry(width=1, height=1, shapes=PLATE)
+
+
+def test_brep_file_keeps_the_shape_not_the_names(tmp_path):
+    domain = plate().domain()
+    path = tmp_path / "plate.brep"
+    domain.shape.WriteBrep(str(path))
+    again = Geometry(kind="occ", file=str(path), boundaries=PLATE_NAMES).domain()
+    assert again.measure == pytest.approx(domain.measure, rel=1e-9)
+    assert set(again.boundary_names) == set(domain.boundary_names)  # named again by selectors
+
+
+def test_nucleation_run_without_cracks():
+    from ngfrac.solve.stepper import PhaseFieldStepper
+
+    ngs.SetNumThreads(1)
+    scene = Scene.from_dict({**plate_scene().to_dict(), "cracks": []})
+    stepper = PhaseFieldStepper(scene)
+    for _ in stepper.run():
+        pass
+    z = stepper.nodes.values(stepper.z)
+    assert 0 <= z.min() and z.max() <= 1
+    assert CRACK_BOUNDARY not in stepper.z.space.mesh.GetBoundaries()
