@@ -14,7 +14,6 @@ tetrahedral mesh of the solid (exact for planar faces, within the chord of a cur
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Iterable, Mapping, Sequence
 

@@ -7,7 +7,8 @@ initial cracks as interior lines (2D, :class:`Rectangle`) or interior faces (3D,
 exp(-d/epsilon) has a kink on the crack; on an aligned mesh its P2 interpolant is smooth on
 each side and the surface energy is accurate (docs/theory.md, "Crack-aligned meshes").
 Nothing else in ngfrac does width/height arithmetic; :func:`domain_of` builds the domain of a
-scene's ``geometry`` section.
+scene's ``geometry`` section. CAD domains (``geometry.kind = "occ"``, any netgen.occ shape)
+are :class:`ngfrac.mesh.cad.OccDomain`.
 """
 from __future__ import annotations
 
