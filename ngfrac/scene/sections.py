@@ -520,6 +520,11 @@ class Geometry(_Section):
             object.__setattr__(self, "_domain", built)
         return built
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Copies and pickles leave out the built occ domain (OCC shapes do not pickle);
+        they build it again from ``shapes`` or ``file``."""
+        return {k: v for k, v in self.__dict__.items() if k != "_domain"}
+
     IN_CODE: ClassVar[str] = "<shape in code>"
     """The ``file`` of a geometry made by :meth:`of_domain`."""
 
@@ -529,7 +534,8 @@ class Geometry(_Section):
         :class:`~ngfrac.mesh.cad.OccDomain` of any netgen.occ shape), for a :class:`Scene`.
 
         Its ``file`` is :attr:`IN_CODE`: such a scene cannot be written to and read from TOML,
-        and ``dataclasses.replace`` of this section loses the domain (that of the scene keeps it).
+        and ``dataclasses.replace``, copies and pickles of this section lose the domain
+        (``dataclasses.replace`` of the scene keeps the section and so the domain).
         """
         geometry = cls.__new__(cls)
         object.__setattr__(geometry, "_domain", domain)

@@ -273,3 +273,13 @@ def test_nucleation_run_without_cracks():
     z = stepper.nodes.values(stepper.z)
     assert 0 <= z.min() and z.max() <= 1
     assert CRACK_BOUNDARY not in stepper.z.space.mesh.GetBoundaries()
+
+
+def test_copies_of_an_occ_geometry_build_their_own_domain():
+    import copy
+    import pickle
+
+    geometry = plate()
+    for again in (copy.deepcopy(geometry), pickle.loads(pickle.dumps(geometry))):
+        assert again == geometry and again.domain() is not geometry.domain()
+        assert again.boundary_names == geometry.boundary_names
