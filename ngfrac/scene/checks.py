@@ -161,6 +161,19 @@ def boundary_segment_of(points: Sequence[Sequence[float]], domain: "Domain",
     return None
 
 
+def segment_outside(points: Sequence[Sequence[float]], domain: "Domain", tol: float,
+                    n: int = 0) -> np.ndarray | None:
+    """A point of a crack's segments (2D) or polygon edges (3D) outside a domain that need
+    not be convex (``n`` points per segment; 0: 32 in 2D, 8 in 3D), or None."""
+    p = np.asarray(points, dtype=float)
+    n = n or (32 if p.shape[1] == 2 else 8)
+    ends = list(zip(p[:-1], p[1:])) + ([(p[-1], p[0])] if p.shape[1] == 3 else [])
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    probes = np.concatenate([a + s * (b - a) for a, b in ends])
+    inside = domain.contains(probes, tol=tol)
+    return None if inside.all() else probes[int(np.argmin(inside))]
+
+
 def _plane_coordinates(corners: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """2D coordinates of points in the plane through corners[0] with the given normal."""
     e1 = corners[1] - corners[0]
@@ -275,6 +288,11 @@ def crack_problems(geometry: "Geometry", cracks: Sequence[Sequence[Sequence[floa
             continue
         on_side = (boundary_segment(crack, sides, tol) if sides is not None
                    else boundary_segment_of(crack, domain, tol))
+        outside = None if sides is not None else segment_outside(crack, domain, tol)
+        if outside is not None:
+            yield (f"cracks[{i}]: it leaves the domain near {_text(outside)} (a hole or notch "
+                   "between its points); keep every segment inside the domain")
+            continue
         if on_side:
             k, name = on_side
             what = f"segment {k}" if k >= 0 else "the polygon"

@@ -217,6 +217,9 @@ def test_scene_checks_work_through_the_occ_domain():
     into_hole = {**data, "cracks": [{"points": [[0.0, 0.5], [1.0, 0.5]]}]}
     with pytest.raises(SceneError, match="lies outside the domain"):
         Scene.from_dict(into_hole)
+    across = {**data, "cracks": [{"points": [[0.5, 0.5], [1.5, 0.5]]}]}
+    with pytest.raises(SceneError, match="leaves the domain near"):
+        Scene.from_dict(across)
     unknown = {**data, "loads": [{"boundary": "left", "value": "t"}]}
     with pytest.raises(SceneError, match="boundaries are bottom, .*hole"):
         Scene.from_dict(unknown)
