@@ -286,3 +286,33 @@ def test_copies_of_an_occ_geometry_build_their_own_domain():
     for again in (copy.deepcopy(geometry), pickle.loads(pickle.dumps(geometry))):
         assert again.to_dict() == geometry.to_dict() and again.domain() is not geometry.domain()
         assert again.boundary_names == geometry.boundary_names
+
+
+@pytest.mark.slow
+def test_3d_adaptive_run_on_a_box_with_a_cylindrical_hole():
+    from ngfrac.solve.stepper import PhaseFieldStepper
+
+    ngs.SetNumThreads(1)
+    scene = Scene.from_dict({
+        "model": {"kind": "elasticity_3d"}, "material": {"E": 1.0, "nu": 0.3},
+        "geometry": {"kind": "occ", "shapes": [
+            {"type": "box", "corner": [0, 0, 0], "size": [1, 1, 0.2]},
+            {"type": "cylinder", "center": [0.6, 0.5, 0], "axis": [0, 0, 1], "radius": 0.1,
+             "height": 0.2, "op": "cut"}],
+            "boundaries": [{"name": "top", "normal": [0, 1, 0]}, {"name": "bottom", "normal": [0, -1, 0]}]},
+        "phase_field": {"epsilon": 0.08, "alpha2": 1e-3},
+        "cracks": [{"points": [[0, 0.5, 0], [0.3, 0.5, 0], [0.3, 0.5, 0.2], [0, 0.5, 0.2]]}],
+        "loads": [{"boundary": "top", "value": ["0", "t", "0"]},
+                  {"boundary": "bottom", "value": ["0", "0", "0"]}],
+        "time": {"dt": 0.01, "t_end": 0.02}, "discretization": {"order": 2},
+        "adaptivity": {"enabled": True, "max_vertices": 1500, "hmin": 0.02},
+        "output": {"vtk_every": 0}})
+    stepper = PhaseFieldStepper(scene)
+    for _ in stepper.run():
+        pass
+    change = stepper.adapt(reason="test")
+    mesh = stepper.z.space.mesh
+    z = stepper.nodes.values(stepper.z)
+    assert change.nv_after <= 1500 and 0 <= z.min() and z.max() <= 1 + 1e-12
+    assert CRACK_BOUNDARY in mesh.GetBoundaries()
+    assert ngs.Integrate(1, mesh) == pytest.approx(scene.geometry.domain().measure, rel=1e-4)
