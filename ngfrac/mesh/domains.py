@@ -7,7 +7,8 @@ initial cracks as interior lines (2D, :class:`Rectangle`) or interior faces (3D,
 exp(-d/epsilon) has a kink on the crack; on an aligned mesh its P2 interpolant is smooth on
 each side and the surface energy is accurate (docs/theory.md, "Crack-aligned meshes").
 Nothing else in ngfrac does width/height arithmetic; :func:`domain_of` builds the domain of a
-scene's ``geometry`` section.
+scene's ``geometry`` section. CAD domains (``geometry.kind = "occ"``, any netgen.occ shape)
+are :class:`ngfrac.mesh.cad.OccDomain`.
 """
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ import ngsolve as ngs
 from ..scene import Geometry
 
 __all__ = ["CRACK_BOUNDARY", "BOUNDARY_TOL", "MeshingError", "Domain", "Rectangle", "Box",
-           "domain_of", "netgen_geometry", "build_mesh"]
+           "domain_of", "occ_domain_of", "netgen_geometry", "build_mesh", "crack_polygon_faces"]
 
 CRACK_BOUNDARY = "crack"
 """Name of the interior mesh edges (2D) or faces (3D) that follow the initial cracks."""
@@ -312,26 +313,45 @@ class Box(_AxisAligned):
         if not cracks:
             return occ.OCCGeometry(box)
         tol = BOUNDARY_TOL * self.longest_side
-        for polygon in cracks:  # OCC segfaults on an edge from a point to itself
-            corners = np.asarray(polygon, dtype=float)
-            gaps = np.linalg.norm(corners - np.roll(corners, -1, axis=0), axis=1)
-            if np.any(gaps <= tol):
-                k = int(np.argmin(gaps))
-                raise MeshingError(f"a crack polygon has a zero-length edge at corner {k} "
-                                   f"{corners[k].tolist()}; remove the repeated corner (ngfrac "
-                                   "check finds it)")
-        faces = []
+        faces = crack_polygon_faces(cracks, tol)
         try:
-            for polygon in cracks:
-                corners = [occ.Pnt(*map(float, p)) for p in polygon]
-                edges = [occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])]
-                face = occ.Face(occ.Wire(edges))
-                face.name = CRACK_BOUNDARY
-                faces.append(face)
             return occ.OCCGeometry(occ.Glue([box, *faces]))
         except Exception as err:  # OCC raises plain Exceptions for degenerate wires and faces
             raise MeshingError(f"OCC could not glue the crack polygons into the box ({err}); "
                                "run ngfrac check on the scene") from None
+
+
+def crack_polygon_faces(cracks: Cracks, tol: float) -> list[Any]:
+    """Planar crack polygons as netgen.occ faces named :data:`CRACK_BOUNDARY`, for
+    ``occ.Glue`` into a solid.
+
+    Raises
+    ------
+    MeshingError
+        A polygon has an edge shorter than ``tol``, or OCC cannot make its face.
+    """
+    from netgen import occ
+
+    for polygon in cracks:  # OCC segfaults on an edge from a point to itself
+        corners = np.asarray(polygon, dtype=float)
+        gaps = np.linalg.norm(corners - np.roll(corners, -1, axis=0), axis=1)
+        if np.any(gaps <= tol):
+            k = int(np.argmin(gaps))
+            raise MeshingError(f"a crack polygon has a zero-length edge at corner {k} "
+                               f"{corners[k].tolist()}; remove the repeated corner (ngfrac "
+                               "check finds it)")
+    faces = []
+    try:
+        for polygon in cracks:
+            corners = [occ.Pnt(*map(float, p)) for p in polygon]
+            edges = [occ.Segment(a, b) for a, b in zip(corners, corners[1:] + corners[:1])]
+            face = occ.Face(occ.Wire(edges))
+            face.name = CRACK_BOUNDARY
+            faces.append(face)
+    except Exception as err:  # OCC raises plain Exceptions for degenerate wires and faces
+        raise MeshingError(f"OCC could not make faces of the crack polygons ({err}); "
+                           "run ngfrac check on the scene") from None
+    return faces
 
 
 def domain_of(geometry: Geometry | Domain) -> Domain:
@@ -344,7 +364,36 @@ def domain_of(geometry: Geometry | Domain) -> Domain:
         return Box(geometry.width, geometry.height, geometry.depth, tuple(geometry.origin))
     if geometry.kind == "rectangle":
         return Rectangle(geometry.width, geometry.height, tuple(geometry.origin))
+    if geometry.kind == "occ":
+        return geometry.domain()  # built once per section (OCC work), kept there
     raise ValueError(f"no domain for geometry.kind = {geometry.kind!r}")
+
+
+def occ_domain_of(geometry: Geometry) -> Domain:
+    """The :class:`~ngfrac.mesh.cad.OccDomain` of a ``geometry.kind = "occ"`` section: its
+    shapes or file, with the boundaries named by its selectors.
+
+    Raises
+    ------
+    SceneError
+        A selector matches nothing, two names claim one part, or the file cannot be read.
+    """
+    from ..scene import SceneError
+    from .cad import BoundaryConflict, name_boundaries, read_shape, shape_from_specs
+
+    try:
+        shape = (read_shape(geometry.file, geometry.scale) if geometry.file
+                 else shape_from_specs(geometry.shapes))
+    except FileNotFoundError as err:
+        raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None
+    except Exception as err:  # OCC raises plain Exceptions for bad shapes or files
+        what = f"file = {geometry.file!r}" if geometry.file else "shapes"
+        text = " ".join(str(err).split())  # one line: OCC's messages span several
+        raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
+    try:
+        return name_boundaries(shape, geometry.boundaries, geometry.default_boundary)
+    except BoundaryConflict as err:
+        raise SceneError(str(err)) from None
 
 
 def netgen_geometry(geometry: Geometry | Domain, cracks: Cracks = ()) -> Any:

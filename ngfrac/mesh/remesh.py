@@ -596,7 +596,8 @@ def generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
     Parameters
     ----------
     ngeo : netgen geometry
-        ``SplineGeometry`` (2D) or ``OCCGeometry`` (3D), from :meth:`Domain.netgen_geometry`.
+        ``SplineGeometry`` (a rectangle) or ``OCCGeometry`` (a box, an occ domain in 2D or 3D),
+        from :meth:`Domain.netgen_geometry`.
     points : (n, d) array
     sizes : (n,) array
     maxh : float

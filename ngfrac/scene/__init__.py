@@ -2,11 +2,12 @@
 overrides, expressions in x, y, z and t, and the checks of a scene before anything runs."""
 from .expressions import Expression, ExpressionError
 from .loading import apply_overrides, load_scene, parse_override, read_scene_data
-from .sections import (LISTS, MODELS, MODELS_3D, SECTIONS, Adaptivity, Components, Crack, Discretization,
-                       Geometry, Load, Material, Model, Output, PhaseField, Scene, SceneError,
+from .sections import (LISTS, MODELS, MODELS_3D, SECTIONS, Adaptivity, BoundarySelector, Components,
+                       Crack, Discretization, Geometry, Shape, Load, Material, Model, Output, PhaseField, Scene, SceneError,
                        TimeSettings)
 
-__all__ = ["MODELS", "MODELS_3D", "SECTIONS", "LISTS", "Adaptivity", "Components", "Crack", "Discretization",
+__all__ = ["MODELS", "MODELS_3D", "SECTIONS", "LISTS", "Adaptivity", "BoundarySelector", "Shape",
+           "Components", "Crack", "Discretization",
            "Expression", "ExpressionError", "Geometry", "Load", "Material", "Model", "Output",
            "PhaseField", "Scene", "SceneError", "TimeSettings", "apply_overrides", "load_scene",
            "parse_override", "read_scene_data"]

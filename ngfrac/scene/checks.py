@@ -140,6 +140,40 @@ def boundary_segment(points: Sequence[Sequence[float]], sides: Mapping[str, tupl
     return None
 
 
+def boundary_segment_of(points: Sequence[Sequence[float]], domain: "Domain",
+                        tol: float) -> tuple[int, str] | None:
+    """As :func:`boundary_segment` for any domain with ``boundary_names_at(point, tol)``: a
+    segment (2D) or the polygon (3D) whose ends and middle (corners and centre) all lie on
+    one named boundary part."""
+    p = np.asarray(points, dtype=float)
+
+    def common(probes: Sequence[np.ndarray]) -> str | None:
+        names = set.intersection(*(domain.boundary_names_at(q, tol) for q in probes))
+        return min(names) if names else None
+
+    if p.shape[1] == 3:
+        name = common([*p, p.mean(axis=0)])
+        return (-1, name) if name else None
+    for k in range(len(p) - 1):
+        name = common([p[k], 0.5 * (p[k] + p[k + 1]), p[k + 1]])
+        if name:
+            return k, name
+    return None
+
+
+def segment_outside(points: Sequence[Sequence[float]], domain: "Domain", tol: float,
+                    n: int = 0) -> np.ndarray | None:
+    """A point of a crack's segments (2D) or polygon edges (3D) outside a domain that need
+    not be convex (``n`` points per segment; 0: 32 in 2D, 8 in 3D), or None."""
+    p = np.asarray(points, dtype=float)
+    n = n or (32 if p.shape[1] == 2 else 8)
+    ends = list(zip(p[:-1], p[1:])) + ([(p[-1], p[0])] if p.shape[1] == 3 else [])
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    probes = np.concatenate([a + s * (b - a) for a, b in ends])
+    inside = domain.contains(probes, tol=tol)
+    return None if inside.all() else probes[int(np.argmin(inside))]
+
+
 def _plane_coordinates(corners: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """2D coordinates of points in the plane through corners[0] with the given normal."""
     e1 = corners[1] - corners[0]
@@ -245,14 +279,20 @@ def crack_problems(geometry: "Geometry", cracks: Sequence[Sequence[Sequence[floa
     """
     domain = _domain(geometry)
     tol = SAME_POINT * domain.diameter
-    sides = domain.sides()
+    sides = domain.sides() if hasattr(domain, "sides") else None  # axis-aligned: exact sides
     for i, crack in enumerate(cracks):
         problem = (polyline_problem(crack, tol) if geometry.dim == 2
                    else polygon_problem(crack, normals[i], tol))
         if problem:
             yield f"cracks[{i}]: {problem}"
             continue
-        on_side = boundary_segment(crack, sides, tol)
+        on_side = (boundary_segment(crack, sides, tol) if sides is not None
+                   else boundary_segment_of(crack, domain, tol))
+        outside = None if sides is not None else segment_outside(crack, domain, tol)
+        if outside is not None:
+            yield (f"cracks[{i}]: it leaves the domain near {_text(outside)} (a hole or notch "
+                   "between its points); keep every segment inside the domain")
+            continue
         if on_side:
             k, name = on_side
             what = f"segment {k}" if k >= 0 else "the polygon"

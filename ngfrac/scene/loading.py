@@ -68,6 +68,12 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
         A TOML scene file.
     overrides : list of str, optional
         ``"section.key=value"`` items applied before validation.
+
+    A relative ``geometry.file`` is taken relative to the scene file's folder.
     """
     data = apply_overrides(read_scene_data(path), overrides or [])
+    geometry = data.get("geometry")
+    if isinstance(geometry, dict) and isinstance(geometry.get("file"), str) and geometry["file"]:
+        # a CAD file is found next to the scene file
+        geometry["file"] = str(Path(path).parent / Path(geometry["file"]).expanduser())
     return Scene.from_dict(data, name=Path(path).stem)

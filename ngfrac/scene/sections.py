@@ -281,33 +281,170 @@ class PhaseField(_Section):
                  f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
 
 
+SHAPE_TYPES_2D = ("rectangle", "circle", "ellipse", "polygon")
+"""``[[geometry.shapes]]`` types of a 2D OCC domain."""
+
+SHAPE_TYPES_3D = ("box", "cylinder", "sphere")
+"""``[[geometry.shapes]]`` types of a 3D OCC domain."""
+
+
+@dataclass(frozen=True)
+class Shape(_Section):
+    """One ``[[geometry.shapes]]`` entry of an OCC domain, combined with those before it.
+
+    ``rectangle``: ``corner = [x, y]``, ``size = [w, h]``. ``circle``: ``center``, ``radius``.
+    ``ellipse``: ``center``, ``radii = [rx, ry]``. ``polygon``: ``points = [[x, y], ...]``.
+    ``box``: ``corner = [x, y, z]``, ``size = [w, h, d]``. ``cylinder``: ``center`` (of the
+    base), ``axis``, ``radius``, ``height``. ``sphere``: ``center``, ``radius``. ``op``:
+    ``"add"`` (union), ``"cut"`` (difference: holes, notches) or ``"intersect"``.
+    """
+
+    SECTION: ClassVar[str] = "geometry.shapes"
+    KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "rectangle": ("corner", "size"), "circle": ("center", "radius"),
+        "ellipse": ("center", "radii"), "polygon": ("points",), "box": ("corner", "size"),
+        "cylinder": ("center", "axis", "radius", "height"), "sphere": ("center", "radius")}
+    type: str = REQUIRED  # type: ignore[assignment]
+    op: str = "add"
+    corner: tuple[float, ...] = ()
+    size: tuple[float, ...] = ()
+    center: tuple[float, ...] = ()
+    radius: float = 0.0
+    radii: tuple[float, ...] = ()
+    points: tuple[tuple[float, ...], ...] = ()
+    axis: tuple[float, ...] = ()
+    height: float = 0.0
+
+    def validate(self) -> None:
+        s = self.SECTION
+        _require(self.type in self.KEYS, s, "type", self.type,
+                 f"choose one of {', '.join(self.KEYS)}")
+        _require(self.op in ("add", "cut", "intersect"), s, "op", self.op,
+                 "choose 'add' (union), 'cut' (difference) or 'intersect'")
+        needed = self.KEYS[self.type]
+        for f in dataclasses.fields(self):
+            if f.name in ("type", "op"):
+                continue
+            given = getattr(self, f.name) != f.default
+            _require(given == (f.name in needed), s, f.name, getattr(self, f.name),
+                     f"a {self.type} takes {', '.join(needed)}" if given
+                     else f"a {self.type} needs {f.name}")
+        n = self.dim
+        for key in ("corner", "center", "axis"):
+            if key in needed:
+                _require(len(getattr(self, key)) == n, s, key, list(getattr(self, key)),
+                         f"give {n} coordinates")
+        for key in ("size", "radii"):
+            if key in needed:
+                _require(len(getattr(self, key)) == (2 if key == "radii" else n)
+                         and min(getattr(self, key)) > 0, s, key, list(getattr(self, key)),
+                         "give positive lengths, one per axis")
+        for key in ("radius", "height"):
+            if key in needed:
+                _require(getattr(self, key) > 0, s, key, getattr(self, key), "must be > 0")
+        if self.type == "polygon":
+            _require(len(self.points) >= 3 and all(len(p) == 2 for p in self.points), s,
+                     "points", [list(p) for p in self.points],
+                     "a polygon needs at least three corners [[x, y], ...]")
+        if self.type == "cylinder":
+            _require(any(self.axis), s, "axis", list(self.axis), "the axis must not be zero")
+
+    @property
+    def dim(self) -> int:
+        """2 for the plane shapes, 3 for the solids."""
+        return 3 if self.type in SHAPE_TYPES_3D else 2
+
+
+@dataclass(frozen=True)
+class BoundarySelector(_Section):
+    """One ``[[geometry.boundaries]]`` entry: ``name`` for the edges (2D) or faces (3D) that
+    one selector picks: ``named`` (their name in the CAD file), ``box = [[x0, y0], [x1, y1]]``
+    (those inside the box), ``point = [x, y]`` (those through the point, within ``tol``) or
+    ``normal = [nx, ny]`` (straight edges, planar faces, with this outward normal)."""
+
+    SECTION: ClassVar[str] = "geometry.boundaries"
+    SELECTORS: ClassVar[tuple[str, ...]] = ("named", "box", "point", "normal")
+    name: str = REQUIRED  # type: ignore[assignment]
+    named: str = ""
+    box: tuple[tuple[float, ...], ...] = ()
+    point: tuple[float, ...] = ()
+    normal: tuple[float, ...] = ()
+    tol: float = 0.0
+    """Distance tolerance of ``box`` and ``point``; 0: 1e-6 times the domain's diameter."""
+
+    def validate(self) -> None:
+        s = self.SECTION
+        _require(bool(self.name) and self.name != "crack", s, "name", self.name,
+                 "give a name other than '' and 'crack' (the initial cracks' edges)")
+        given = [k for k in self.SELECTORS if getattr(self, k)]
+        _require(len(given) == 1, s, "name", self.name,
+                 f"give exactly one of {', '.join(self.SELECTORS)} (given: {', '.join(given) or 'none'})")
+        if self.box:
+            _require(len(self.box) == 2 and len(self.box[0]) == len(self.box[1]) in (2, 3), s,
+                     "box", [list(p) for p in self.box], "give [[x0, y0], [x1, y1]] (3D: [x, y, z])")
+        if self.normal:
+            _require(any(self.normal), s, "normal", list(self.normal), "must not be zero")
+        _require(self.tol >= 0, s, "tol", self.tol, "must be >= 0 (0: 1e-6 of the diameter)")
+
+    def describe(self) -> str:
+        """The selector as the scene writes it, for messages."""
+        key = next(k for k in self.SELECTORS if getattr(self, k))
+        value = getattr(self, key)
+        text = repr(value) if isinstance(value, str) else str(_plain(value))
+        return f"name = {self.name!r}, {key} = {text}"
+
+
 @dataclass(frozen=True)
 class Geometry(_Section):
-    """The domain: an axis-parallel rectangle (2D) or box (3D).
+    """The domain: an axis-parallel rectangle (2D) or box (3D), or a CAD shape (``occ``).
 
     ``rectangle``: [x0, x0 + width] x [y0, y0 + height], boundaries bottom (y = y0), right,
     top, left. ``box``: [x0, x0 + width] x [y0, y0 + height] x [z0, z0 + depth], faces left
     (x = x0), right (x = x0 + width), bottom (y = y0), top (y = y0 + height), back (z = z0),
-    front (z = z0 + depth).
+    front (z = z0 + depth). ``occ``: ``[[geometry.shapes]]`` (:class:`Shape`) or a CAD
+    ``file`` (STEP, BREP, IGES; times ``scale``), boundaries named by ``[[geometry.boundaries]]``
+    (:class:`BoundarySelector`) and the file; the rest is ``default_boundary``
+    (:mod:`ngfrac.mesh.cad`).
     """
 
     SECTION: ClassVar[str] = "geometry"
-    KINDS: ClassVar[tuple[str, ...]] = ("rectangle", "box")
+    KINDS: ClassVar[tuple[str, ...]] = ("rectangle", "box", "occ")
+    OCC_KEYS: ClassVar[tuple[str, ...]] = ("shapes", "boundaries", "file", "scale",
+                                           "default_boundary")
     BOUNDARIES: ClassVar[tuple[str, ...]] = ("bottom", "right", "top", "left")
     BOUNDARIES_3D: ClassVar[tuple[str, ...]] = ("left", "right", "bottom", "top", "back", "front")
-    width: float = REQUIRED  # type: ignore[assignment]
-    height: float = REQUIRED  # type: ignore[assignment]
+    width: float = math.nan
+    """Required for a rectangle or a box."""
+    height: float = math.nan
     kind: str = "rectangle"
     origin: tuple[float, ...] = (0.0, 0.0)
     depth: float = 0.0
     """Extent in z of a box; 0 (not given) for a rectangle."""
     mesh_size: float = 0.0
     """Uniform maximal element size; 0 means epsilon/2."""
+    shapes: tuple[Shape, ...] = ()
+    boundaries: tuple[BoundarySelector, ...] = ()
+    file: str = ""
+    scale: float = 1.0
+    default_boundary: str = "free"
 
     def validate(self) -> None:
         s = self.SECTION
+        if self.kind in ("rectangle", "box"):
+            for key in ("width", "height"):
+                if math.isnan(getattr(self, key)):
+                    raise SceneError(f"missing key {_key(s, key)!r}; it is required")
         _require(self.kind in self.KINDS, s, "kind", self.kind,
-                 "choose 'rectangle' (2D) or 'box' (3D)")
+                 "choose 'rectangle' (2D), 'box' (3D) or 'occ' (CAD shapes or a file)")
+        _require(self.mesh_size >= 0, s, "mesh_size", self.mesh_size,
+                 "must be > 0 (or 0 for epsilon/2)")
+        if self.kind == "occ":
+            self._validate_occ()
+            return
+        for key in self.OCC_KEYS:
+            value = getattr(self, key)
+            _require(value == Geometry.__dataclass_fields__[key].default, s, key, _plain(value),
+                     "only geometry.kind = 'occ' takes it")
         _require(self.width > 0, s, "width", self.width, "must be > 0")
         _require(self.height > 0, s, "height", self.height, "must be > 0")
         if self.kind == "box":
@@ -320,17 +457,43 @@ class Geometry(_Section):
             _require(len(self.origin) == 2, s, "origin", list(self.origin), "give [x, y]")
             _require(self.depth == 0, s, "depth", self.depth,
                      "only a box has a depth; set geometry.kind = 'box' or remove depth")
-        _require(self.mesh_size >= 0, s, "mesh_size", self.mesh_size,
-                 "must be > 0 (or 0 for epsilon/2)")
+
+    def _validate_occ(self) -> None:
+        """Shapes or a file, no rectangle keys; building the domain checks the selectors."""
+        s = self.SECTION
+        for key in ("width", "height", "depth"):
+            value = getattr(self, key)
+            _require(math.isnan(value) or value == 0, s, key, value,
+                     "an occ domain takes its extent from its shapes or file; remove it")
+        _require(self.origin == (0.0, 0.0), s, "origin", list(self.origin),
+                 "an occ domain has no origin; move its shapes")
+        _require(bool(self.shapes) != bool(self.file), s, "shapes",
+                 [f"{shape.type}" for shape in self.shapes],
+                 "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
+        _require(self.scale > 0, s, "scale", self.scale, "must be > 0")
+        _require(bool(self.default_boundary) and self.default_boundary != "crack", s,
+                 "default_boundary", self.default_boundary, "give a name other than '' and 'crack'")
+        if self.shapes:
+            _require(self.shapes[0].op == "add", s, "shapes[0].op", self.shapes[0].op,
+                     "the first shape starts the domain: use op = 'add'")
+            dims = {shape.dim for shape in self.shapes}
+            _require(len(dims) == 1, s, "shapes", [shape.type for shape in self.shapes],
+                     f"mix no plane shapes ({', '.join(SHAPE_TYPES_2D)}) with solids "
+                     f"({', '.join(SHAPE_TYPES_3D)})")
+        self.domain()  # raises SceneError for a selector that matches nothing or a conflict
 
     @property
     def dim(self) -> int:
-        """2 for a rectangle, 3 for a box."""
+        """2 for a rectangle, 3 for a box; an occ domain's own."""
+        if self.kind == "occ":
+            return self.domain().dim
         return 3 if self.kind == "box" else 2
 
     @property
     def extent(self) -> tuple[float, ...]:
-        """(width, height) or (width, height, depth)."""
+        """(width, height) or (width, height, depth); an occ domain's bounding box."""
+        if self.kind == "occ":
+            return self.domain().extent
         return (self.width, self.height, self.depth)[: self.dim]
 
     @property
@@ -339,14 +502,61 @@ class Geometry(_Section):
 
     @property
     def boundary_names(self) -> tuple[str, ...]:
+        if self.kind == "occ":
+            return self.domain().boundary_names
         return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
 
     def domain(self) -> "Domain":
         """The domain this section describes (:func:`ngfrac.mesh.domains.domain_of`): its
-        boundary and containment tests, measure and sample points live there."""
-        from ..mesh.domains import domain_of
+        boundary and containment tests, measure and sample points live there. An occ domain
+        is built once per section (OCC work) and kept."""
+        from ..mesh.domains import domain_of, occ_domain_of
 
-        return domain_of(self)
+        if self.kind != "occ":
+            return domain_of(self)
+        built = self.__dict__.get("_domain")
+        if built is None:
+            built = occ_domain_of(self)
+            object.__setattr__(self, "_domain", built)
+        return built
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Copies and pickles leave out the built occ domain (OCC shapes do not pickle);
+        they build it again from ``shapes`` or ``file``."""
+        return {k: v for k, v in self.__dict__.items() if k != "_domain"}
+
+    IN_CODE: ClassVar[str] = "<shape in code>"
+    """The ``file`` of a geometry made by :meth:`of_domain`."""
+
+    @classmethod
+    def of_domain(cls, domain: "Domain", mesh_size: float = 0.0) -> "Geometry":
+        """An occ geometry section for a domain built in code (an
+        :class:`~ngfrac.mesh.cad.OccDomain` of any netgen.occ shape), for a :class:`Scene`.
+
+        Its ``file`` is :attr:`IN_CODE`: such a scene cannot be written to and read from TOML,
+        and ``dataclasses.replace``, copies and pickles of this section lose the domain
+        (``dataclasses.replace`` of the scene keeps the section and so the domain).
+        """
+        geometry = cls.__new__(cls)
+        object.__setattr__(geometry, "_domain", domain)
+        cls.__init__(geometry, kind="occ", file=cls.IN_CODE, mesh_size=mesh_size)
+        return geometry
+
+    def to_dict(self) -> dict[str, Any]:
+        """The keys as a scene file writes them: no occ keys for a rectangle or box, none of
+        a shape's or selector's keys at their defaults."""
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, float) and math.isnan(value):
+                continue
+            if f.name in self.OCC_KEYS and self.kind != "occ":
+                continue
+            if f.name in ("shapes", "boundaries"):
+                value = [{g.name: _plain(getattr(item, g.name)) for g in dataclasses.fields(item)
+                          if getattr(item, g.name) != g.default} for item in value]
+            out[f.name] = _plain(value)
+        return out
 
 
 @dataclass(frozen=True)
@@ -712,6 +922,8 @@ class Scene:
                              "model.kind = 'mode3' has no tension or compression: set split = 'none'")
 
     def _domain_text(self) -> str:
+        if self.geometry.kind == "occ":
+            return "(the occ shape)"
         return " x ".join(f"[{o}, {o + e}]" for o, e in zip(self.geometry.origin, self.geometry.extent))
 
     def _check_gamma_positive(self) -> None:
@@ -782,6 +994,7 @@ class Scene:
         out: dict[str, Any] = {"name": self.name}
         for name in SECTIONS:
             out[name] = section(getattr(self, name))
+        out["geometry"] = self.geometry.to_dict()
         for name in LISTS:
             out[name] = [section(item) for item in getattr(self, name)]
         return out
@@ -841,10 +1054,21 @@ def _has_type(value: Any, hint: Any, default: Any) -> bool:
         return isinstance(value, (Expression, Components))
     if hint == tuple[float, ...]:
         return isinstance(value, tuple) and all(number(v) for v in value)
+    if _table_class(hint) is not None:
+        return isinstance(value, tuple) and all(isinstance(v, _table_class(hint)) for v in value)
     if hint == tuple[tuple[float, ...], ...]:
         return isinstance(value, tuple) and all(
             isinstance(p, tuple) and all(number(v) for v in p) for p in value)
     return False
+
+
+def _table_class(hint: Any) -> type | None:
+    """The section class of a field that is a list of tables (``tuple[Shape, ...]``)."""
+    args = getattr(hint, "__args__", ())
+    if getattr(hint, "__origin__", None) is tuple and len(args) == 2 and args[1] is Ellipsis \
+            and isinstance(args[0], type) and issubclass(args[0], _Section):
+        return args[0]
+    return None
 
 
 def _plain(value: Any) -> Any:
@@ -895,6 +1119,14 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
         if not isinstance(value, list):
             raise SceneError(f"{key} = {value!r} must be a list of numbers")
         return tuple(_convert(v, float, key) for v in value)
+    table = _table_class(hint)
+    if table is not None:
+        if isinstance(value, Mapping):
+            value = [value]
+        if not isinstance(value, list):
+            raise SceneError(f"{key} must be an array of tables ([[{key}]])")
+        return tuple(item if isinstance(item, table) else _build(table, item, f"{key}[{i}]")
+                     for i, item in enumerate(value))
     if hint == tuple[tuple[float, ...], ...]:
         if not isinstance(value, list) or not all(isinstance(v, list) for v in value):
             raise SceneError(f"{key} = {value!r} must be a list of points [[x, y], ...] "

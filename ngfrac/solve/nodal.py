@@ -44,8 +44,29 @@ class LagrangeNodes:
             if fes.ndof != nv + len(pairs) or tuple(first) != (nv,):
                 raise RuntimeError("unexpected dof layout of the order-2 H1 space")
             self.points = np.vstack([vertices, 0.5 * (vertices[pairs[:, 0]] + vertices[pairs[:, 1]])])
+            if mesh.GetCurveOrder() > 1:
+                self._curved_midpoints(mesh, vertices)
             self.beta = self._midpoint_bubble_value(fes, vertices, pairs)
         self.nv = nv
+
+    def _curved_midpoints(self, mesh: ngs.Mesh, vertices: np.ndarray) -> None:
+        """On a curved mesh the edge node of a curved (boundary) edge is the image of the
+        reference midpoint, not the chord's midpoint (which may lie outside the mesh)."""
+        dim = mesh.dim
+        corners = (np.array([[0.0], [1.0]]) if dim == 2
+                   else np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]))
+        nv = mesh.nv
+        for el in mesh.Elements(ngs.BND):
+            trafo = mesh.GetTrafo(ngs.ElementId(el))
+            mapped = np.array([list(trafo(*c).point) for c in corners])
+            local = {}  # global vertex -> reference coordinates
+            for v in el.vertices:
+                k = int(np.argmin(np.linalg.norm(mapped - vertices[v.nr], axis=1)))
+                local[v.nr] = corners[k]
+            for edge in el.edges:
+                a, b = (v.nr for v in mesh[edge].vertices)
+                middle = 0.5 * (local[a] + local[b])
+                self.points[nv + edge.nr] = np.array(list(trafo(*middle).point))
 
     @staticmethod
     def _midpoint_bubble_value(fes: ngs.FESpace, vertices: np.ndarray, pairs: np.ndarray) -> float:

@@ -35,14 +35,20 @@ class MeshFields:
     def on(cls, mesh: ngs.Mesh, scene: Scene, model: Any) -> "MeshFields":
         """Spaces and zero fields on ``mesh`` for ``scene`` and its elastic ``model``.
 
+        On an occ domain with a curved boundary and order >= 2 the mesh is curved
+        (``mesh.Curve(order)``) first.
+
         One quadrature in every form and energy (:func:`quadrature_order`): the u-step then
         minimizes exactly the energy that the diagnostics report.
         """
         disc = scene.discretization
+        curved = disc.order >= 2 and scene.geometry.kind == "occ" and scene.geometry.domain().curved
+        if curved:
+            mesh.Curve(disc.order)  # curved boundaries (ngfrac.mesh.cad): isoparametric u
         fes_u = model.space(mesh, disc.order, scene.loads)
         fes_z = ngs.H1(mesh, order=disc.z_order)
-        order = quadrature_order(disc.order, disc.z_order,
-                                 exact=scene.material.gamma.is_constant and scene.material.split == "none")
+        exact = scene.material.gamma.is_constant and scene.material.split == "none" and not curved
+        order = quadrature_order(disc.order, disc.z_order, exact=exact)
         return cls(mesh, fes_u, fes_z, ngs.GridFunction(fes_u, "u"),
                    ngs.GridFunction(fes_u, "u_prev"), ngs.GridFunction(fes_z, "z"),
                    LagrangeNodes(fes_z), order, dx_of_order(mesh, order))
@@ -69,7 +75,8 @@ def quadrature_order(order_u: int, order_z: int, exact: bool = True) -> int:
     On affine elements with constant toughness every integrand is a polynomial:
     (1 - z)^2 sigma[u]:e[v] and the drive W zt w have degree 2 order_z + 2 (order_u - 1),
     the mass terms 2 order_u and 2 order_z, the surface terms at most 2 order_z. P2/P2: 6.
-    ``exact = False`` (a toughness that varies, a split's non-polynomial energy) adds 2.
+    ``exact = False`` (a toughness that varies, a split's non-polynomial energy, curved
+    elements) adds 2.
     """
     degree = max(2 * order_z + 2 * max(order_u - 1, 0), 2 * order_u, 2 * order_z)
     return degree if exact else degree + 2

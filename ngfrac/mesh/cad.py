@@ -1,0 +1,464 @@
+"""CAD domains: any netgen.occ shape as a :class:`~ngfrac.mesh.domains.Domain`.
+
+A 2D domain is a face (or faces) in the plane z = 0, a 3D domain a solid. Boundary names are
+the names of the shape's edges (2D) or faces (3D), as a STEP file or ``shape.edges[i].name``
+gives them; :func:`name_boundaries` sets them from selectors (a name in the file, a bounding
+box, a point on the part, an outward normal) and gives every part left unnamed a default name.
+Initial cracks are glued in (``netgen.occ.Glue``) as interior edges (2D polylines) or faces
+(3D planar polygons) named ``crack``, as the rectangle and the box do it.
+
+Containment is exact in 2D (OCC's distance from the point to the face is 0 inside); in 3D
+OCC's distance to a solid is that to its boundary, so points are located in a coarse
+tetrahedral mesh of the solid (exact for planar faces, within the chord of a curved face).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, ClassVar, Iterable, Mapping, Sequence
+
+import numpy as np
+import ngsolve as ngs
+
+from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces
+
+__all__ = ["OccDomain", "BoundaryConflict", "name_boundaries", "shape_from_specs", "read_shape",
+           "DEFAULT_BOUNDARY"]
+
+DEFAULT_BOUNDARY = "free"
+"""Name of the boundary edges (faces) that neither the shape nor a selector names."""
+
+NORMAL_TOL = 1e-6
+"""A part matches a normal selector where 1 - cos(angle) stays below this everywhere."""
+
+
+class BoundaryConflict(ValueError):
+    """A selector matches nothing, or two names claim the same edge (face): one line."""
+
+
+def _pnt(p: Sequence[float]) -> Any:
+    from netgen import occ
+
+    return occ.Pnt(*(float(c) for c in p), *([0.0] * (3 - len(p))))
+
+
+def _sub_parts(shape: Any, dim: int) -> list[Any]:
+    """The boundary parts: edges of the faces (2D) or faces of the solids (3D), each once."""
+    parts = shape.edges if dim == 2 else shape.faces
+    return list(parts)
+
+
+class OccDomain:
+    """A domain from a netgen.occ shape: a face (faces) in z = 0 for 2D, a solid for 3D.
+
+    Parameters
+    ----------
+    shape : netgen.occ shape
+        Its edges (2D) or faces (3D) carry the boundary names; an unnamed one is given
+        ``default_name`` (in place: OCC keeps names on the shape).
+    default_name : str
+        Name of the parts left unnamed.
+    curved_order : int
+        ``build_mesh`` curves its meshes to this order (0: straight) where the geometry is
+        curved; :class:`ngfrac.solve.spaces.MeshFields` curves to the order of u.
+
+    Examples
+    --------
+    >>> from netgen import occ
+    >>> plate = occ.WorkPlane().Rectangle(2, 1).Face() - occ.WorkPlane().Circle(1, 0.5, 0.2).Face()
+    >>> plate.edges.Min(occ.Y).name = "bottom"
+    >>> OccDomain(plate).boundary_names
+    ('bottom', 'free')
+    """
+
+    kind: ClassVar[str] = "occ"
+
+    def __init__(self, shape: Any, default_name: str = DEFAULT_BOUNDARY) -> None:
+        self.shape = shape
+        self._dim = 3 if len(shape.solids) else 2
+        if self._dim == 2 and not len(shape.faces):
+            raise ValueError("a 2D OCC domain needs a face (e.g. WorkPlane().Rectangle(w, h).Face())")
+        box = shape.bounding_box
+        pad = 1e-7  # OCC's bounding boxes are enlarged by its tolerance
+        self._low = np.array([box[0][k] + pad for k in range(self._dim)])
+        self._high = np.array([box[1][k] - pad for k in range(self._dim)])
+        if self._dim == 2 and max(abs(box[0][2]), abs(box[1][2])) > 1e-6 * max(
+                1.0, float(np.linalg.norm(self._high - self._low))):
+            raise ValueError("a 2D OCC domain must lie in the plane z = 0")
+        self._parts = _sub_parts(shape, self._dim)
+        for part in self._parts:
+            if not part.name:
+                part.name = default_name
+        self._boundary = None
+        self._locator: ngs.Mesh | None = None
+        self._curved: bool | None = None
+
+    def __repr__(self) -> str:
+        return f"OccDomain({self._dim}D, boundaries {', '.join(self.boundary_names)})"
+
+    # -- sizes -----------------------------------------------------------------------------------
+
+    @property
+    def dim(self) -> int:
+        return self._dim
+
+    @property
+    def boundary_names(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(part.name for part in self._parts))
+
+    @property
+    def measure(self) -> float:
+        """Area (sum over the faces) or volume (over the solids); OCC's ``mass`` of a compound
+        is 0, that of each face (solid) is its area (volume)."""
+        parts = self.shape.faces if self._dim == 2 else self.shape.solids
+        return float(sum(part.mass for part in parts))
+
+    @property
+    def origin(self) -> tuple[float, ...]:
+        """The lower corner of the bounding box."""
+        return tuple(self._low.tolist())
+
+    @property
+    def extent(self) -> tuple[float, ...]:
+        """The bounding box's sides."""
+        return tuple((self._high - self._low).tolist())
+
+    @property
+    def diameter(self) -> float:
+        """The diagonal of the bounding box (an upper bound of the diameter)."""
+        return float(np.linalg.norm(self._high - self._low))
+
+    @property
+    def shortest_side(self) -> float:
+        """The smallest side of the bounding box."""
+        return float(np.min(self._high - self._low))
+
+    @property
+    def curved(self) -> bool:
+        """Whether a boundary edge (face) is curved, so that meshes should be curved."""
+        if self._curved is None:
+            self._curved = any(not _is_flat(part, self._dim) for part in self._parts)
+        return self._curved
+
+    # -- Netgen ----------------------------------------------------------------------------------
+
+    def netgen_geometry(self, cracks: Any = ()) -> Any:
+        """The ``OCCGeometry`` with the cracks glued in as interior edges (2D) or faces (3D)
+        named ``crack``; a crack end on the boundary splits that edge, both parts keep its name."""
+        from netgen import occ
+
+        if not cracks:
+            return occ.OCCGeometry(self.shape, dim=self._dim)
+        tol = BOUNDARY_TOL * self.diameter
+        pieces = (self._crack_edges(cracks, tol) if self._dim == 2
+                  else crack_polygon_faces(cracks, tol))
+        try:
+            return occ.OCCGeometry(occ.Glue([self.shape, *pieces]), dim=self._dim)
+        except Exception as err:  # OCC raises plain Exceptions
+            raise MeshingError(f"OCC could not glue the cracks into the shape ({err}); run "
+                               "ngfrac check on the scene") from None
+
+    def _crack_edges(self, cracks: Any, tol: float) -> list[Any]:
+        from netgen import occ
+
+        edges = []
+        for line in cracks:
+            for p, q in zip(line[:-1], line[1:]):
+                if math.dist(p, q) <= tol:  # OCC fails on an edge from a point to itself
+                    raise MeshingError(f"a crack segment from {list(p)} to {list(q)} has zero "
+                                       "length; remove the repeated point (ngfrac check finds it)")
+                middle = [0.5 * (a + b) for a, b in zip(p, q)]
+                if self.on_boundary(middle, tol):
+                    continue  # a segment along the boundary changes nothing
+                edge = occ.Segment(_pnt(p), _pnt(q))
+                edge.name = CRACK_BOUNDARY
+                edges.append(edge)
+        return edges
+
+    def build_mesh(self, maxh: float, cracks: Any = ()) -> ngs.Mesh:
+        """A quasi-uniform mesh of element size ``maxh`` with edges (faces) along the cracks
+        (straight elements: :class:`~ngfrac.solve.spaces.MeshFields` curves them).
+
+        Raises
+        ------
+        MeshingError
+            Netgen failed; the message says what to change.
+        """
+        if maxh <= 0:
+            raise ValueError(f"maxh must be > 0, got {maxh}")
+        try:
+            ngmesh = self.netgen_geometry(cracks).GenerateMesh(maxh=maxh)
+        except MeshingError:
+            raise
+        except Exception as err:  # netgen raises plain Exceptions for bad geometries
+            raise MeshingError(f"Netgen could not mesh the OCC shape with its cracks ({err}) at "
+                               f"maxh = {maxh:g}; change the cracks or the mesh size") from None
+        return ngs.Mesh(ngmesh)
+
+    # -- points ----------------------------------------------------------------------------------
+
+    def _boundary_compound(self) -> Any:
+        from netgen import occ
+
+        if self._boundary is None:
+            self._boundary = occ.Compound(self._parts)
+        return self._boundary
+
+    def distance_to_boundary(self, point: Sequence[float]) -> float:
+        """OCC's distance from a point to the boundary edges (faces)."""
+        from netgen import occ
+
+        return float(self._boundary_compound().Distance(occ.Vertex(_pnt(point[: self._dim]))))
+
+    def on_boundary(self, point: Sequence[float], tol: float | None = None) -> bool:
+        """Whether a point lies within ``tol`` (default :data:`BOUNDARY_TOL` times the
+        diameter) of a boundary edge (face)."""
+        tol = BOUNDARY_TOL * self.diameter if tol is None else tol
+        return self.distance_to_boundary(point) <= tol
+
+    def boundary_names_at(self, point: Sequence[float], tol: float | None = None) -> set[str]:
+        """The names of the boundary parts within ``tol`` of a point (a corner may have
+        several; none off the boundary)."""
+        from netgen import occ
+
+        tol = BOUNDARY_TOL * self.diameter if tol is None else tol
+        vertex = occ.Vertex(_pnt(point[: self._dim]))
+        return {part.name for part in self._parts if part.Distance(vertex) <= tol}
+
+    def contains(self, points: Any, tol: float = 0.0) -> Any:
+        """Whether a point (d,) or points (n, d) lie in the closed domain, within ``tol``."""
+        p = np.asarray(points, dtype=float)
+        if p.shape[-1] != self._dim:
+            raise ValueError(f"points of dimension {p.shape[-1]} in a {self._dim}D OCC domain")
+        flat = p.reshape(-1, self._dim)
+        slack = tol + BOUNDARY_TOL * self.diameter
+        inside = np.all((flat >= self._low - slack) & (flat <= self._high + slack), axis=1)
+        candidates = np.flatnonzero(inside)
+        inside[candidates] = (self._contains_2d(flat[candidates], slack) if self._dim == 2
+                              else self._contains_3d(flat[candidates], slack))
+        return bool(inside[0]) if p.ndim == 1 else inside
+
+    def _contains_2d(self, points: np.ndarray, slack: float) -> np.ndarray:
+        from netgen import occ
+
+        return np.array([self.shape.Distance(occ.Vertex(_pnt(q))) <= slack for q in points],
+                        dtype=bool)
+
+    def _contains_3d(self, points: np.ndarray, slack: float) -> np.ndarray:
+        if self._locator is None:
+            self._locator = ngs.Mesh(self.netgen_geometry().GenerateMesh(maxh=self.diameter / 8))
+        if not len(points):
+            return np.zeros(0, dtype=bool)
+        located = self._locator(points[:, 0], points[:, 1], points[:, 2])["nr"] >= 0
+        near = np.flatnonzero(~located)
+        located[near] = [self.distance_to_boundary(q) <= slack for q in points[near]]
+        return located
+
+    def sample_points(self, n: int = 0) -> tuple[np.ndarray, ...]:
+        """The points of an ``n``-per-side grid over the bounding box (0: 41 in 2D, 13 in 3D)
+        that the domain contains."""
+        n = n or (41 if self._dim == 2 else 13)
+        axes = [np.linspace(a, b, n) for a, b in zip(self._low, self._high)]
+        grid = np.stack([a.ravel() for a in np.meshgrid(*axes, indexing="ij")], axis=1)
+        keep = self.contains(grid)
+        return tuple(grid[keep, k] for k in range(self._dim))
+
+    def boundary_points(self, name: str, n: int = 0) -> tuple[np.ndarray, ...]:
+        """Points on the boundary parts called ``name``: ``n`` per edge (0: 51) in 2D, the
+        vertices of a coarse surface mesh of the faces in 3D."""
+        parts = [part for part in self._parts if part.name == name]
+        if not parts:
+            raise ValueError(f"{name!r} is not a boundary of the OCC domain; boundaries are "
+                             f"{', '.join(self.boundary_names)}")
+        points = np.concatenate([_part_points(part, self._dim, n or 51) for part in parts])
+        return tuple(points[:, k] for k in range(self._dim))
+
+
+def _edge_points(edge: Any, n: int) -> np.ndarray:
+    t0, t1 = edge.parameter_interval
+    return np.array([[q.x, q.y, q.z] for q in (edge.Value(t) for t in np.linspace(t0, t1, n))])
+
+
+def _face_triangles(face: Any) -> np.ndarray:
+    """(m, 3, 3) triangles of a coarse Netgen surface mesh of one face.
+
+    (``TopoDS_Shape.Triangulation()`` returns a type pybind11 cannot convert in netgen
+    6.2.2608, so the face is meshed by Netgen instead.)"""
+    from netgen import occ
+
+    box = face.bounding_box
+    size = max(box[1][k] - box[0][k] for k in range(3))
+    geo = occ.OCCGeometry(face, dim=3)
+    ngmesh = geo.GenerateMesh(maxh=size / 6, perfstepsend=3)  # MESHSURFACE: stop at the surface
+    coords = np.array([list(p.p) for p in ngmesh.Points()])
+    triangles = [[v.nr - 1 for v in el.vertices] for el in ngmesh.Elements2D()]
+    return coords[np.asarray(triangles, dtype=int)]
+
+
+def _part_points(part: Any, dim: int, n: int) -> np.ndarray:
+    if dim == 2:
+        return _edge_points(part, n)[:, :2]
+    return np.unique(_face_triangles(part).reshape(-1, 3), axis=0)
+
+
+def _part_normals(part: Any, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Points on a part and a unit normal at each (sign not yet outward)."""
+    if dim == 2:
+        t0, t1 = part.parameter_interval
+        ts = np.linspace(t0, t1, 9)[1:-1]
+        points = np.array([[part.Value(t).x, part.Value(t).y] for t in ts])
+        tangents = np.array([[part.Tangent(t).x, part.Tangent(t).y] for t in ts])
+        normals = np.stack([tangents[:, 1], -tangents[:, 0]], axis=1)
+    else:
+        tri = _face_triangles(part)
+        points = tri.mean(axis=1)
+        normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+    return points, normals / np.where(lengths > 0, lengths, 1.0)
+
+
+def _is_flat(part: Any, dim: int) -> bool:
+    """Whether an edge is straight (2D) or a face planar (3D)."""
+    if dim == 2:
+        points = _edge_points(part, 5)
+        chord = np.linalg.norm(points[-1] - points[0])
+        length = float(part.mass)
+        return chord > 0 and abs(length - chord) <= 1e-9 * length
+    _, normals = _part_normals(part, dim)
+    return bool(np.all(np.abs(normals @ normals[0]) >= 1 - NORMAL_TOL))
+
+
+# -- building shapes ---------------------------------------------------------------------------
+
+SHAPES_2D = ("rectangle", "circle", "ellipse", "polygon")
+SHAPES_3D = ("box", "cylinder", "sphere")
+OPS = ("add", "cut", "intersect")
+
+
+def _primitive(spec: Any) -> Any:
+    """One netgen.occ shape of a scene's ``[[geometry.shapes]]`` entry."""
+    from netgen import occ
+
+    kind = spec.type
+    if kind == "rectangle":
+        (x, y), (w, h) = spec.corner, spec.size
+        return occ.WorkPlane().MoveTo(x, y).Rectangle(w, h).Face()
+    if kind == "circle":
+        return occ.WorkPlane().Circle(*spec.center, spec.radius).Face()
+    if kind == "ellipse":
+        (x, y), (a, b) = spec.center, spec.radii
+        plane = occ.WorkPlane().MoveTo(x, y)
+        if a < b:  # the first radius is along the current direction, and must be the major one
+            return plane.Direction(0, 1).Ellipse(b, a).Face()
+        return plane.Ellipse(a, b).Face()
+    if kind == "polygon":
+        plane = occ.WorkPlane().MoveTo(*spec.points[0])
+        for point in spec.points[1:]:
+            plane = plane.LineTo(*point)
+        return plane.Close().Face()
+    if kind == "box":
+        corner = np.asarray(spec.corner, dtype=float)
+        return occ.Box(_pnt(corner), _pnt(corner + np.asarray(spec.size, dtype=float)))
+    if kind == "cylinder":
+        return occ.Cylinder(_pnt(spec.center), occ.Vec(*spec.axis), r=spec.radius, h=spec.height)
+    if kind == "sphere":
+        return occ.Sphere(_pnt(spec.center), spec.radius)
+    raise ValueError(f"unknown shape type {kind!r}")
+
+
+def shape_from_specs(specs: Iterable[Any]) -> Any:
+    """The shape of ``[[geometry.shapes]]``: the first entry, then each one added (fused),
+    cut or intersected in order; faces (solids) that touch are merged (``UnifySameDomain``)."""
+    shape = None
+    for spec in specs:
+        piece = _primitive(spec)
+        if shape is None:
+            shape = piece
+        elif spec.op == "add":
+            shape = shape + piece
+        elif spec.op == "cut":
+            shape = shape - piece
+        else:
+            shape = shape * piece
+    if shape is None:
+        raise ValueError("no shapes")
+    return shape.UnifySameDomain()
+
+
+def read_shape(path: str | Path, scale: float = 1.0) -> Any:
+    """The shape of a STEP, BREP or IGES file (names of edges and faces kept), times
+    ``scale`` about the origin. A file without solids is a 2D domain (faces in z = 0)."""
+    from netgen import occ
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no CAD file {str(path)!r}")
+    shape = occ.OCCGeometry(str(path)).shape
+    if scale != 1.0:
+        shape = shape.Scale(occ.Pnt(0, 0, 0), scale)
+    return shape
+
+
+# -- boundary selectors ------------------------------------------------------------------------
+
+def _matches(domain: OccDomain, part: Any, selector: Any, tol: float,
+             file_names: Mapping[Any, str]) -> bool:
+    from netgen import occ
+
+    dim = domain.dim
+    if selector.named:
+        return file_names.get(part, "") == selector.named
+    if selector.box:
+        low, high = (np.asarray(c, dtype=float) for c in selector.box)
+        box = part.bounding_box
+        part_low = np.array([box[0][k] + 1e-7 for k in range(dim)])
+        part_high = np.array([box[1][k] - 1e-7 for k in range(dim)])
+        return bool(np.all(part_low >= low - tol) and np.all(part_high <= high + tol))
+    if selector.point:
+        return part.Distance(occ.Vertex(_pnt(selector.point))) <= tol
+    wanted = np.asarray(selector.normal, dtype=float)
+    wanted = wanted / np.linalg.norm(wanted)
+    points, normals = _part_normals(part, dim)
+    if not np.all(np.abs(normals @ wanted) >= 1 - NORMAL_TOL):
+        return False
+    step = 1e-4 * domain.diameter  # which side of the part the domain lies on
+    sign = np.sign(normals[0] @ wanted)
+    return not domain.contains(points[0] + step * sign * normals[0])
+
+
+def name_boundaries(shape: Any, selectors: Sequence[Any], default_name: str = DEFAULT_BOUNDARY,
+                    ) -> OccDomain:
+    """Name the boundary parts of ``shape`` by selectors and return its domain.
+
+    A selector has a ``name`` and one of ``named`` (the part's name in the file), ``box``
+    ([low, high] corners: parts inside it), ``point`` (parts through it, within ``tol``) or
+    ``normal`` (straight edges or planar faces with this outward normal).
+
+    Raises
+    ------
+    BoundaryConflict
+        A selector matches nothing, or two selectors with different names match one part.
+    """
+    dim = 3 if len(shape.solids) else 2
+    parts = _sub_parts(shape, dim)
+    file_names = {part: part.name or "" for part in parts}
+    for part in parts:
+        part.name = None
+    probe = OccDomain(shape, default_name="")  # for containment and the diameter only
+    chosen: dict[Any, tuple[str, int]] = {}
+    for i, selector in enumerate(selectors):
+        tol = selector.tol or 1e-6 * probe.diameter
+        matched = [part for part in parts if _matches(probe, part, selector, tol, file_names)]
+        if not matched:
+            raise BoundaryConflict(f"geometry.boundaries[{i}] ({selector.describe()}) matches no "
+                                   f"{'edge' if dim == 2 else 'face'} of the shape")
+        for part in matched:
+            name, j = chosen.get(part, (selector.name, i))
+            if name != selector.name:
+                raise BoundaryConflict(f"geometry.boundaries[{j}] ({name!r}) and "
+                                       f"geometry.boundaries[{i}] ({selector.name!r}) claim the "
+                                       f"same {'edge' if dim == 2 else 'face'}; make them disjoint")
+            chosen[part] = (name, j)
+    for part in parts:
+        part.name = chosen[part][0] if part in chosen else (file_names[part] or default_name)
+    return probe  # its names are the parts' (now set); it keeps what it has computed
