@@ -180,10 +180,10 @@ def final_ridge(scene: Scene, mesh: ngs.Mesh, z: Any, level: float = 0.5) -> Cra
         return None
     eps = scene.phase_field.epsilon
     origin, reference = tip_and_direction(scene.cracks[0].points)
-    g = scene.geometry
-    corners = np.array([[x, y] for x in (g.origin[0], g.origin[0] + g.width)
-                        for y in (g.origin[1], g.origin[1] + g.height)])
-    reach = float(np.max(np.linalg.norm(corners - origin, axis=1)))
+    # the farthest point of the domain from the initial tip is a mesh vertex (a corner of a
+    # rectangle, any shape's extreme point up to the mesh)
+    vertices = np.array(mesh.ngmesh.Coordinates())[:, :2]
+    reach = float(np.max(np.linalg.norm(vertices - origin, axis=1)))
     spacing = eps / 2
     radii = np.arange(2 * eps, reach, spacing)
     path = ridge_path(mesh, z, origin, reference, radii, level=level)
