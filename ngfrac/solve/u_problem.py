@@ -1,6 +1,7 @@
 """The u-sub-problem of one step: the degraded elastic equation for the current z.
 
-    alpha1 (u - u_prev)/dt = div((g(z) + eta) sigma[u]) + f      u = g_D(t) on Gamma_D
+    alpha1 (u - u_prev)/dt = div((g(z) + eta) sigma[u]) + f - p grad z     u = g_D(t) on Gamma_D
+                                                          sigma n = t_N(t) on Gamma_N
 
 One linear solve (a factorization made once per mesh and numerically updated after each
 assembly, or CG with BDDC), or Newton on the energy with a tension/compression split
@@ -67,10 +68,26 @@ class DisplacementProblem:
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
                     if pf.alpha1 > 0 else None)
         self.body_force = model.body_force(scene.material, time)
-        self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx)
+        self.f_u = self._load_form(scene, v)
         self._newton = self._newton_solver(pf.alpha1) if self.split is not None else None
         self.indicators: dict = {}
         """Reaction test functions of this mesh (:func:`ngfrac.post.reactions.reaction`)."""
+
+    def _load_form(self, scene: Scene, v: Any) -> ngs.LinearForm | None:
+        """f_u: the body force, the tractions and pressures on the boundary (not degraded)
+        and the crack pressure ``-p grad z . v`` (the u-derivative of ``int p u.grad z``);
+        None when all are absent, so that scenes without them assemble nothing."""
+        f, time = self.fields, self.context.time
+        terms = [] if self.body_force is None else [self.body_force * v * f.dx]
+        boundary = self.model.boundary_force(f.mesh, scene.loads, time, v)
+        if boundary is not None:
+            terms.append(boundary)
+        if scene.phase_field.pressurized:
+            p = scene.phase_field.crack_pressure.to_coefficient(time)
+            terms.append(-p * ngs.InnerProduct(ngs.grad(f.z), v) * f.dx)
+        if not terms:
+            return None
+        return ngs.LinearForm(sum(terms[1:], terms[0]))
 
     @property
     def iterations(self) -> int:
