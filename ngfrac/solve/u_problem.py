@@ -17,11 +17,13 @@ import numpy as np
 import ngsolve as ngs
 
 from ..physics.crack_models import CrackModel
+from ..physics.elastic import traction_of
 from ..physics.splits import NewtonResult, NewtonSolver, make_split, tangent_integrators
 from ..scene import Scene
 from .linear import UOperator, register_preconditioner
 from .context import StepContext
 from .spaces import MeshFields
+from .threads import integrate
 
 
 class SolverError(RuntimeError):
@@ -46,7 +48,7 @@ class DisplacementProblem:
 
     def __init__(self, fields: MeshFields, scene: Scene, model: Any, crack_model: CrackModel,
                  context: StepContext) -> None:
-        self.fields, self.model, self.context = fields, model, context
+        self.fields, self.model, self.context, self.scene = fields, model, context, scene
         time, inv_dt = context.time, context.inv_dt
         pf, disc = scene.phase_field, scene.discretization
         self.eta = pf.residual_stiffness
@@ -88,6 +90,26 @@ class DisplacementProblem:
         if not terms:
             return None
         return ngs.LinearForm(sum(terms[1:], terms[0]))
+
+    def surface_work(self) -> float | None:
+        """The work of the tractions, pressures and the crack pressure at the current u and z,
+        ``int_Gamma_N t.u ds - int p u.grad z``, or None without any (E_total subtracts it
+        with the body force's work)."""
+        f, scene, time = self.fields, self.scene, self.context.time
+        boundary = [load for load in scene.loads if not load.is_dirichlet]
+        total = None
+        for load in boundary:
+            traction = traction_of(load, f.mesh, time)
+            density = traction * f.u if f.u.dim == 1 else ngs.InnerProduct(traction, f.u)
+            value = float(integrate(density, f.mesh, order=f.integration_order, vb=ngs.BND,
+                                    definedon=f.mesh.Boundaries(load.boundary)))
+            total = value if total is None else total + value
+        if scene.phase_field.pressurized:
+            p = scene.phase_field.crack_pressure.to_coefficient(time)
+            value = -float(integrate(p * ngs.InnerProduct(f.u, ngs.grad(f.z)), f.mesh,
+                                     order=f.integration_order))
+            total = value if total is None else total + value
+        return total
 
     @property
     def iterations(self) -> int:
