@@ -224,7 +224,7 @@ def check_sneddon(history):
     exact = 2 * np.pi * 1e-3 * t * (1 - 0.3 ** 2)
     ratio = history["crack_volume"][1:] / exact
     assert np.all(np.abs(ratio - 1) < 0.05), ratio
-    assert np.ptp(ratio) < 1e-6, ratio  # linear in p
+    assert np.ptp(ratio) < 1e-4, ratio  # linear in p (z rises by < 1e-7 a step: 1e-5 drift)
 
 
 CHECKS = {"mode3_slit": check_slit, "mode3_slit_at1": check_slit_at1, "mode3_stripes": check_stripes,
