@@ -141,3 +141,56 @@ def test_crack_pressure_needs_t_only_and_a_vector_model():
         scene_from(data_for(loads, kind="mode3"), 'phase_field.crack_pressure="x*t"')
     with pytest.raises(SceneError, match=r"^phase_field\.crack_pressure = '2\*t' needs a plane"):
         scene_from(data_for(loads, kind="mode3"), 'phase_field.crack_pressure="2*t"')
+
+
+# -- the pressurized crack (phase_field.crack_pressure) ----------------------------------------
+def pressurized_stepper(*overrides):
+    from ngfrac.testing.scenes import DEMOS
+
+    from ngfrac.scene import apply_overrides, read_scene_data
+    from ngfrac.scene import Scene
+
+    data = apply_overrides(read_scene_data(DEMOS / "sneddon.toml"),
+                           ["adaptivity.enabled=false", "geometry.origin=[-4.0, -4.0]",
+                            "geometry.width=8.0", "geometry.height=8.0", "geometry.mesh_size=0.1",
+                            "phase_field.epsilon=0.3", *overrides])
+    stepper = PhaseFieldStepper(Scene.from_dict(data))
+    return stepper, stepper.step()
+
+
+def test_crack_pressure_opens_the_crack_and_its_energy_is_consistent():
+    # At the u-minimizer of 1/2 a(u, u) + int p u.grad z, a(u, u) = -int p u.grad z = p V
+    # (Clapeyron), so E_el = p V / 2 and E_total = E_surf - p V / 2 (z frozen by alpha2).
+    from ngfrac.post.pressurized import opening_profile
+
+    stepper, record = pressurized_stepper()
+    p = 1e-3 * record.t
+    assert record.crack_volume > 0
+    assert "crack_volume" in record.header()
+    assert record.E_el == pytest.approx(p * record.crack_volume / 2, rel=1e-5)
+    assert record.E_total == pytest.approx(record.E_surf - p * record.crack_volume / 2, rel=1e-5)
+    profile = opening_profile(stepper.u, stepper.z, stepper.scene.cracks[0].points,
+                              3.0, stepper.domain.contains, extend=2.5)
+    assert profile.w[len(profile.w) // 2] > 0
+    # lines over [-2.5, 2.5] l0 and +-10 eps hold all of the band (l0 + 5 eps): int w ds = V
+    assert profile.volume == pytest.approx(record.crack_volume, rel=1e-2)
+
+
+def test_no_crack_pressure_no_column():
+    stepper, record = pressurized_stepper('phase_field.crack_pressure="0"')
+    assert "crack_volume" not in record.header()
+    assert stepper.u_problem.f_u is None  # nothing assembled for the load
+
+
+def test_crack_pressure_drives_z():
+    # the z-source -p u.grad w is >= 0 at an opening crack: z rises faster with pressure
+    # (coupling "paper": the second step's z sees the u of the first, the first u0 = 0)
+    import ngsolve as ngs
+
+    totals = []
+    for p in ("0", "1e3*t"):
+        stepper, _ = pressurized_stepper(f'phase_field.crack_pressure="{p}"',
+                                         "phase_field.alpha2=1.0", "time.dt=0.01")
+        stepper.step(diagnose=False)
+        totals.append(ngs.Integrate(stepper.z, stepper.mesh))
+    assert totals[1] > totals[0] * (1 + 1e-6), totals
