@@ -194,3 +194,24 @@ def test_crack_pressure_drives_z():
         stepper.step(diagnose=False)
         totals.append(ngs.Integrate(stepper.z, stepper.mesh))
     assert totals[1] > totals[0] * (1 + 1e-6), totals
+
+
+def test_traction_in_3d_gives_uniaxial_stress():
+    # a box on rollers (bottom, left, back) pulled by a traction s on the top: sigma_yy = s,
+    # u_y = s y / ((1 + eta) E), u_x = -nu s x / ((1 + eta) E), exact for P2
+    data = demo_data("box3d")
+    data.pop("adaptivity", None)
+    data["cracks"] = []
+    data["material"] = {"E": E, "nu": NU}
+    data["loads"] = [{"boundary": "bottom", "value": ["free", "0", "free"]},
+                     {"boundary": "left", "value": ["0", "free", "free"]},
+                     {"boundary": "back", "value": ["free", "free", "0"]},
+                     {"boundary": "top", "kind": "traction", "value": ["0", f"{S}", "0"]}]
+    scene = scene_from(data, f"phase_field.residual_stiffness={ETA}", "discretization.order=2")
+    stepper = PhaseFieldStepper(scene, mesh=build_mesh(scene.geometry, 0.5))
+    with ngs.TaskManager():
+        stepper.solve_u()
+    x, y, z = 0.7, 0.9, 0.05
+    u = np.array(stepper.u(stepper.mesh(x, y, z)))
+    expected = np.array([-NU * S * x, S * y, -NU * S * z]) / ((1 + ETA) * E)
+    assert np.abs(u - expected).max() < 1e-10 * S / E, (u, expected)
