@@ -35,15 +35,17 @@ from .plotting import plot_force_displacement, plot_history, plot_phase_field, r
 from .results import ResultsWriter
 from ..post.crackpath import crack_path_rows, final_ridge
 from ..post.fields import snapshot_fields
+from ..post.pressurized import opening_profile
 from ..scene import Scene
 from ..scene.checks import resolution_warnings
 
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "Plots", "Progress",
-           "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers", "default_writers",
-           "run_info", "snapshot_due", "write_crack_path", "write_plots", "write_snapshot"]
+__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "OpeningCSV",
+           "Plots", "Progress", "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers",
+           "default_writers", "run_info", "snapshot_due", "write_crack_path", "write_opening",
+           "write_plots", "write_snapshot"]
 
 CHECKPOINT = "checkpoint.h5"
 PLOTS = ("history.png", "crack.png", "force_displacement.png")
@@ -311,6 +313,36 @@ class CrackPathCSV(Writer):
             write_crack_path(self.folder.path, stepper)
 
 
+OPENING_HALF_WIDTH = 10.0
+"""Half length of the lines across the crack of opening.csv, in epsilon (z = exp(-10))."""
+
+
+def write_opening(out: Path, stepper: "PhaseFieldStepper") -> Path:
+    """opening.csv: ``w(s) = -int u.grad z dn`` on lines across the first initial crack (2D,
+    straight between its first and last point; :func:`ngfrac.post.pressurized.opening_profile`)."""
+    scene = stepper.scene
+    profile = opening_profile(stepper.u, stepper.z, scene.cracks[0].points,
+                              OPENING_HALF_WIDTH * scene.phase_field.epsilon,
+                              stepper.domain.contains)
+    path = out / "opening.csv"
+    with HistoryWriter(path, ["step", "t", "s", "x", "y", "w"]) as writer:
+        for row in zip(profile.s, profile.x, profile.y, profile.w):
+            writer.write([stepper.k, stepper.t, *(float(v) for v in row)])
+    return path
+
+
+class OpeningCSV(Writer):
+    """``opening.csv`` at the end of a run with ``phase_field.crack_pressure`` and a 2D
+    initial crack (:func:`default_writers` adds it then)."""
+
+    def __init__(self, folder: RunFolder) -> None:
+        self.folder = folder
+
+    def finish(self, stepper: "PhaseFieldStepper") -> None:
+        with stepper.timer.phase("output: opening"), self.folder.manifest.writing("opening.csv"):
+            write_opening(self.folder.path, stepper)
+
+
 def write_plots(out: Path, stepper: "PhaseFieldStepper") -> None:
     """history.png, crack.png (z with the tip path) and force_displacement.png (if any)."""
     plot_history(out / "history.csv", out / "history.png")
@@ -371,7 +403,8 @@ def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list
 
     :class:`HistoryCSV`, :class:`ResultsH5` (when ``output.results``), :class:`VTKSnapshots`,
     :class:`Checkpoints` (after the other writes of a step), :class:`CrackPathCSV` (after
-    history.csv is closed) and, with ``plots``, :class:`Plots`. ``vtk/`` is made here, so the
+    history.csv is closed), :class:`OpeningCSV` (with a crack pressure) and, with ``plots``,
+    :class:`Plots`. ``vtk/`` is made here, so the
     manifest lists it before the other files.
     """
     vtk = VTKSnapshots(folder, scene)
@@ -379,6 +412,8 @@ def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list
     if scene.output.results:
         writers.append(ResultsH5(folder, scene))
     writers += [vtk, Checkpoints(folder, scene), CrackPathCSV(folder)]
+    if scene.phase_field.pressurized and scene.cracks and scene.geometry.dim == 2:
+        writers.append(OpeningCSV(folder))
     if plots:
         writers.append(Plots(folder))
     return writers

@@ -8,7 +8,12 @@ surface energy) is the same for all models and lives in the stepper. The interfa
 - ``stress_strain(u, v)`` = sigma[u]:e[v] and ``energy_density(u)`` = sigma[u]:e[u];
 - ``boundary_values(mesh, loads, t)``: one CoefficientFunction with the prescribed values, and
   ``set_boundary(gf, cf)`` to put them on the Dirichlet dofs of a GridFunction;
-- ``body_force(material, t)``: f as a CoefficientFunction of u's shape, or None when f = 0.
+- ``body_force(material, t)``: f as a CoefficientFunction of u's shape, or None when f = 0;
+- ``boundary_force(mesh, loads, t, v)``: the work of the tractions and pressures,
+  ``sum int_Gamma t.v ds`` (a linear-form integrand), or None when there are none.
+
+Only loads of ``kind = "displacement"`` make Dirichlet boundaries; tractions and pressures
+act on the boundary undegraded (the crack is inside).
 """
 from __future__ import annotations
 
@@ -33,10 +38,36 @@ class ElasticModel(Protocol):
     def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any: ...
     def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None: ...
     def body_force(self, material: Material, t: ngs.Parameter) -> Any | None: ...
+    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+                       v: Any) -> Any | None: ...
 
 
 def _is_zero(expression: Expression | str) -> bool:
     return isinstance(expression, Expression) and expression.is_constant and expression.value() == 0
+
+
+def dirichlet_loads(loads: tuple[Load, ...]) -> tuple[Load, ...]:
+    """The loads that prescribe u (``kind = "displacement"``)."""
+    return tuple(load for load in loads if load.is_dirichlet)
+
+
+def traction_of(load: Load, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
+    """The traction sigma n a Neumann load prescribes: its value, or -p n for a pressure."""
+    if load.kind == "pressure":
+        return -load.value.to_coefficient(t) * ngs.specialcf.normal(mesh.dim)
+    if isinstance(load.value, Components):
+        return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in load.value))
+    return load.value.to_coefficient(t)
+
+
+def boundary_work(mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter, v: Any) -> Any | None:
+    """``sum over Neumann loads of int_Gamma traction . v ds``, or None without any."""
+    def dot(traction: Any) -> Any:
+        return traction * v if v.dim == 1 else ngs.InnerProduct(traction, v)
+
+    terms = [dot(traction_of(load, mesh, t)) * ngs.ds(definedon=mesh.Boundaries(load.boundary))
+             for load in loads if not load.is_dirichlet]
+    return sum(terms[1:], terms[0]) if terms else None
 
 
 class AntiPlane:
@@ -58,7 +89,8 @@ class AntiPlane:
 
     def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
         """The displacement space, Dirichlet on every loaded boundary."""
-        return ngs.H1(mesh, order=order, dirichlet="|".join(load.boundary for load in loads))
+        return ngs.H1(mesh, order=order,
+                      dirichlet="|".join(load.boundary for load in dirichlet_loads(loads)))
 
     def stress_strain(self, u: Any, v: Any) -> Any:
         """The bilinear integrand sigma[u]:e[v]."""
@@ -74,8 +106,8 @@ class AntiPlane:
 
     def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any:
         """One CoefficientFunction with each load's expression on its boundary."""
-        return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t) for load in loads},
-                               default=0)
+        return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t)
+                                for load in dirichlet_loads(loads)}, default=0)
 
     def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None:
         """Interpolate ``cf`` into the Dirichlet dofs of ``gf`` (its other dofs are unspecified)."""
@@ -85,6 +117,11 @@ class AntiPlane:
         """The out-of-plane force f, or None when it is zero."""
         force = material.body_force
         return None if _is_zero(force) else force.to_coefficient(t)
+
+    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+                       v: Any) -> Any | None:
+        """``int_Gamma tau v ds`` of the traction loads (tau = sigma_zn), or None."""
+        return boundary_work(mesh, loads, t, v)
 
 
 class Elasticity:
@@ -107,7 +144,8 @@ class Elasticity:
 
     def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
         """VectorH1, Dirichlet in component i on the boundaries whose load gives that component."""
-        flags = {f"dirichlet{c}": "|".join(load.boundary for load in loads if not load.free[i])
+        flags = {f"dirichlet{c}": "|".join(load.boundary for load in dirichlet_loads(loads)
+                                           if not load.free[i])
                  for i, c in enumerate(self.component_names)}
         return ngs.VectorH1(mesh, order=order, **flags)
 
@@ -136,7 +174,7 @@ class Elasticity:
             return ngs.CoefficientFunction(tuple(
                 0.0 if free else entry.to_coefficient(t) for entry, free in zip(value, value.free)))
 
-        return mesh.BoundaryCF({load.boundary: vector(load.value) for load in loads},
+        return mesh.BoundaryCF({load.boundary: vector(load.value) for load in dirichlet_loads(loads)},
                                default=ngs.CoefficientFunction((0.0,) * self.n_components))
 
     def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None:
@@ -156,6 +194,11 @@ class Elasticity:
         if all(_is_zero(entry) for entry in force):
             return None
         return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in force))
+
+    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+                       v: Any) -> Any | None:
+        """``int_Gamma t.v ds`` of the traction and pressure loads (t = -p n), or None."""
+        return boundary_work(mesh, loads, t, v)
 
 
 class PlaneStrain(Elasticity):

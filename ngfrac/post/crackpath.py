@@ -416,6 +416,9 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     model = make_model(scene)
     if model.n_components != 2:
         raise ValueError("sharp_crack_solution is for the plane models")
+    if not all(load.is_dirichlet for load in scene.loads) or scene.phase_field.pressurized:
+        raise ValueError("sharp_crack_solution takes displacement loads only (no tractions, "
+                         "pressures or crack pressure)")
     crack = scene.cracks[0].points
     size = max(scene.geometry.width, scene.geometry.height)
     for opening in (1e-6 * size, 1e-5 * size, 1e-4 * size):  # Netgen fails on some thin wedges

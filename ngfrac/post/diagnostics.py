@@ -19,7 +19,8 @@ class Energies:
     E_surf: float
     crack_length: float
     work: float = 0.0
-    """int f.u, the work of the body force."""
+    """The work of the loads: int f.u of the body force (the stepper adds the tractions' and
+    the crack pressure's, :meth:`ngfrac.solve.u_problem.DisplacementProblem.surface_work`)."""
 
     @property
     def E_total(self) -> float:

@@ -10,7 +10,9 @@ the body force; the variationally consistent value comes from the residual inste
 R vanishes at the free dofs, so only the constrained dofs of Gamma contribute, and by Green's
 formula ``<R, w_i> = int_Gamma ((1-z)^2 + eta) sigma n . e_i ds`` whenever the traction is
 smooth. A corner shared with another boundary that prescribes the same component counts for
-both boundaries; a component the load leaves free has F_i = 0.
+both boundaries; a component the load leaves free has F_i = 0. Tractions and pressures
+(Neumann loads) are part of f, so the reactions balance them: without alpha1 and with no
+dof on two Dirichlet boundaries, the reactions sum to minus the applied force.
 
 Compute reactions after the u-solve and before any mesh change: the residual uses the matrix
 of that solve (assembled with the z it used, z^{k-1} inside a step).
@@ -72,16 +74,16 @@ def reaction_forces(problem: "DisplacementProblem", loads: tuple["Load", ...],
         The u-sub-problem (:mod:`ngfrac.solve.u_problem`) after its solve, before any mesh
         change: its residual holds the reactions.
     loads : tuple of Load
-        The scene's loads.
+        The scene's loads; only displacement loads (Dirichlet boundaries) have a reaction.
     boundaries : tuple of str, optional
-        Loaded boundaries to report; all loaded boundaries by default.
+        Dirichlet boundaries to report; all of them by default.
 
     Returns
     -------
     dict
         boundary -> array of (Fx, Fy) (mode III: (Fz,), the out-of-plane force).
     """
-    by_name = {load.boundary: load for load in loads}
+    by_name = {load.boundary: load for load in loads if load.is_dirichlet}
     r = problem.residual()
     out = {}
     for name in boundaries or tuple(by_name):
@@ -99,7 +101,7 @@ def boundary_mean(u: ngs.GridFunction, boundary: str) -> np.ndarray:
 
 
 def reaction_columns(problem: "DisplacementProblem", loads: tuple["Load", ...]) -> dict[str, float]:
-    """History columns: ``F<c>_<boundary>`` and ``u<c>_<boundary>`` for each loaded boundary.
+    """History columns: ``F<c>_<boundary>`` and ``u<c>_<boundary>`` for each Dirichlet boundary.
 
     ``c`` is x, y (plane models) or z (mode III, out of plane); ``u<c>`` is the boundary mean
     of u, which is the imposed displacement for a uniform load.

@@ -155,6 +155,12 @@ class Model(_Section):
         """
         kind, n = self.kind, self.n_components
         for i, load in enumerate(loads):
+            if load.kind == "pressure":
+                if n == 1:
+                    raise SceneError(f"loads[{i}].kind = 'pressure' needs a plane or 3D model, but "
+                                     "model.kind = 'mode3' has no normal displacement; use "
+                                     "kind = 'traction' (the out-of-plane shear stress)")
+                continue  # one expression (Load.validate)
             if n == 1 and isinstance(load.value, Components):
                 raise SceneError(f"loads[{i}].value = {load.value.text} is a list, but model.kind = "
                                  "'mode3' takes one expression (the out-of-plane displacement)")
@@ -269,9 +275,13 @@ class PhaseField(_Section):
     alpha1: float = 0.0
     residual_stiffness: float = 1e-6
     model: str = "AT2"
+    crack_pressure: Expression = Expression("0.0")
+    """p(t) inside the crack (the pressurized-crack work term ``int p u.grad z``); 0 = none."""
 
     def validate(self) -> None:
         s = self.SECTION
+        _require(self.crack_pressure.names <= {"t"}, s, "crack_pressure", self.crack_pressure.text,
+                 "an expression in t only (a pressure uniform in the crack)")
         _require(self.epsilon > 0, s, "epsilon", self.epsilon, "the regularization length must be > 0")
         _require(self.alpha2 > 0, s, "alpha2", self.alpha2, "the time constant of z must be > 0")
         _require(self.alpha1 >= 0, s, "alpha1", self.alpha1, "must be >= 0 (0 = quasi-static u)")
@@ -279,6 +289,12 @@ class PhaseField(_Section):
                  self.residual_stiffness, "must be in (0, 0.1); 1e-6 is typical")
         _require(self.model in CRACK_MODELS, s, "model", self.model,
                  f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
+
+    @property
+    def pressurized(self) -> bool:
+        """Whether a crack pressure is set (``crack_pressure`` not the constant 0)."""
+        p = self.crack_pressure
+        return not (p.is_constant and p.value() == 0)
 
 
 SHAPE_TYPES_2D = ("rectangle", "circle", "ellipse", "polygon")
@@ -610,29 +626,59 @@ class Crack(_Section):
         return normal / length if length > 1e-12 * scale else np.zeros(3)
 
 
+LOAD_KINDS = ("displacement", "traction", "pressure")
+"""What a load prescribes on its boundary (``loads[i].kind``)."""
+
+
 @dataclass(frozen=True)
 class Load(_Section):
-    """A Dirichlet displacement on one named boundary, expressions in x, y, t.
+    """A load on one named boundary, expressions in x, y, t (3D also z).
 
-    Mode III: one expression, ``value = "10*t"``. Plane models: one per component,
-    ``value = ["0", "10*t"]``; ``"free"`` leaves a component unconstrained (rollers:
-    ``value = ["free", "0"]``).
+    ``kind = "displacement"`` (the default): a Dirichlet displacement. Mode III: one
+    expression, ``value = "10*t"``. Plane models: one per component, ``value = ["0", "10*t"]``;
+    ``"free"`` leaves a component unconstrained (rollers: ``value = ["free", "0"]``).
+    ``kind = "traction"``: a Neumann traction sigma n = value, of the same shape as a
+    displacement (no ``"free"``). ``kind = "pressure"``: one expression p, the traction
+    -p n (plane and 3D models).
     """
 
     SECTION: ClassVar[str] = "loads"
     boundary: str = REQUIRED  # type: ignore[assignment]
     value: Expression | Components = REQUIRED  # type: ignore[assignment]
+    kind: str = "displacement"
 
     def validate(self) -> None:
+        s = self.SECTION
+        _require(self.kind in LOAD_KINDS, s, "kind", self.kind,
+                 f"choose {', '.join(repr(k) for k in LOAD_KINDS)}")
+        if self.kind == "pressure":
+            _require(not isinstance(self.value, Components), s, "value", _plain_value(self.value),
+                     "a pressure is one expression p(x, y, t) (it acts as -p n), not a list")
         if isinstance(self.value, Components):
-            _require(len(self.value) > 0, self.SECTION, "value", [], "give [ux, uy]")
-            _require(not all(self.value.free), self.SECTION, "value", self.value.text,
+            _require(len(self.value) > 0, s, "value", [], "give [ux, uy]")
+            if self.kind == "traction":
+                _require(not any(self.value.free), s, "value", self.value.text,
+                         "a traction gives every component (use \"0\", not \"free\")")
+            _require(not all(self.value.free), s, "value", self.value.text,
                      "every component is free, so the load constrains nothing; remove it")
 
     @property
+    def is_dirichlet(self) -> bool:
+        """Whether the load prescribes u (``kind = "displacement"``)."""
+        return self.kind == "displacement"
+
+    @property
     def free(self) -> tuple[bool, ...]:
-        """Which components are left free (mode III: never)."""
+        """Which components are left free (mode III: never; a traction or pressure prescribes
+        no component of u, so all are free)."""
+        if not self.is_dirichlet:
+            n = len(self.value) if isinstance(self.value, Components) else 1
+            return (True,) * n
         return self.value.free if isinstance(self.value, Components) else (False,)
+
+
+def _plain_value(value: Expression | Components) -> Any:
+    return [str(e) for e in value] if isinstance(value, Components) else value.text
 
 
 @dataclass(frozen=True)
@@ -822,8 +868,10 @@ class Scene:
         self._coerce_sections()
         names = self.geometry.boundary_names
         self._check_dimension()
-        if not self.loads:
-            raise SceneError("loads: a scene needs at least one [[loads]] entry (a Dirichlet boundary)")
+        if not any(load.is_dirichlet for load in self.loads):
+            raise SceneError("loads: a scene needs at least one [[loads]] entry with kind = "
+                             "'displacement' (a Dirichlet boundary); tractions alone leave u "
+                             "undetermined up to a rigid motion")
         seen = set()
         for i, load in enumerate(self.loads):
             if load.boundary not in names:
@@ -840,6 +888,7 @@ class Scene:
             raise SceneError(f"material.body_force = {self.material.body_force.text!r} uses z, "
                              "but the domain is 2D")
         self.model.check(self.material, self.loads)
+        self._check_constrained()
         self._check_split()
         for i, crack in enumerate(self.cracks):
             if crack.dim != self.geometry.dim:
@@ -914,9 +963,25 @@ class Scene:
             raise SceneError(f"geometry.kind = {geometry!r} is 3D but model.kind = {kind!r} is 2D; "
                              f"set model.kind = {MODELS_3D[0]!r}")
 
+    def _check_constrained(self) -> None:
+        """Quasi-static u (alpha1 = 0) needs every component of u prescribed on some boundary;
+        otherwise a rigid translation solves the homogeneous problem (a singular matrix)."""
+        if self.phase_field.alpha1 > 0:
+            return  # the alpha1/dt mass term makes the u-problem definite
+        dirichlet = [load for load in self.loads if load.is_dirichlet]
+        names = ("z",) if self.model.n_components == 1 else "xyz"[: self.model.n_components]
+        for i, c in enumerate(names):
+            if all(load.free[i] for load in dirichlet):
+                raise SceneError(f"loads: u{c} is prescribed on no boundary (every displacement "
+                                 f"load leaves it 'free'), so with phase_field.alpha1 = 0 the "
+                                 "u-problem is singular; prescribe it on one boundary")
+
     def _check_split(self) -> None:
-        """A split needs a vector model (ngfrac.physics.splits)."""
+        """A split (ngfrac.physics.splits) and a crack pressure need a vector model."""
         split, kind = self.material.split, self.model.kind
+        if self.phase_field.pressurized and kind == "mode3":
+            raise SceneError(f"phase_field.crack_pressure = {self.phase_field.crack_pressure.text!r} "
+                             "needs a plane or 3D model: mode III has no opening")
         if split != "none" and kind == "mode3":
             raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
                              "model.kind = 'mode3' has no tension or compression: set split = 'none'")

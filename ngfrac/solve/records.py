@@ -45,8 +45,13 @@ class StepRecord:
     """z of the tip, a column of 3D runs only (after tip_y)."""
     dim: int = 2
     """Dimension of the domain (not a column)."""
+    crack_volume: float = math.nan
+    """-int u.grad z, a column of runs with ``phase_field.crack_pressure`` only (after
+    path_length)."""
+    pressurized: bool = False
+    """Whether the scene sets a crack pressure (not a column)."""
 
-    NOT_FIXED = ("forces", "tip_z", "dim")
+    NOT_FIXED = ("forces", "tip_z", "dim", "crack_volume", "pressurized")
 
     @property
     def has_diagnostics(self) -> bool:
@@ -61,11 +66,13 @@ class StepRecord:
         names = self.columns()
         if self.dim == 3:
             names.insert(names.index("tip_y") + 1, "tip_z")
+        if self.pressurized:
+            names.insert(names.index("path_length") + 1, "crack_volume")
         return names
 
     def header(self) -> list[str]:
-        """All column names of this record: the fixed ones (and tip_z in 3D), then the
-        force columns."""
+        """All column names of this record: the fixed ones (and tip_z in 3D, crack_volume
+        with a crack pressure), then the force columns."""
         return self._names() + list(self.forces)
 
     def row(self) -> list[float | int]:

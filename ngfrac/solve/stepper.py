@@ -14,6 +14,7 @@ the adapter (:mod:`ngfrac.mesh.adapter`) owns every mesh change.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from typing import Any, Iterator
@@ -28,6 +29,7 @@ from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.elastic import make_model
 from ..post.crackset import CrackSet
 from ..post.diagnostics import energies
+from ..post.pressurized import crack_volume
 from ..post.reactions import reaction_columns
 from ..scene import Scene
 from .crack_tracking import CrackTracker
@@ -121,8 +123,9 @@ class PhaseFieldStepper:
         self.u_problem = DisplacementProblem(self.fields, sc, self.model, self.crack_model,
                                              self.context)
         f = self.fields
-        drive = self.u_problem.drive(f.u_prev if sc.discretization.coupling == "paper" else f.u)
-        self.z_problem = PhaseFieldProblem(f, sc, self.crack_model, self.gamma, drive, self.context)
+        u_drive = f.u_prev if sc.discretization.coupling == "paper" else f.u
+        self.z_problem = PhaseFieldProblem(f, sc, self.crack_model, self.gamma,
+                                           self.u_problem.drive(u_drive), self.context, u_drive)
         return self.fields
 
     def _initial_state(self, mesh: ngs.Mesh) -> MeshFields:
@@ -296,7 +299,7 @@ class PhaseFieldStepper:
         base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self.timer.started,
                     dim=f.mesh.dim, nv=f.mesh.nv, ndof=f.ndof, n_adapt=len(self.adaptations),
                     eta_total=self.adapter.eta_total if self.adapter is not None else math.nan,
-                    **step)
+                    pressurized=self.scene.phase_field.pressurized, **step)
         if not diagnose:
             return StepRecord(**base)
         pf, body_force = self.scene.phase_field, self.u_problem.body_force
@@ -305,6 +308,11 @@ class PhaseFieldStepper:
                          pf.epsilon, pf.residual_stiffness,
                          None if body_force is None else body_force * f.u,
                          order=f.integration_order, crack_model=self.crack_model)
+        extra_work = self.u_problem.surface_work()
+        if extra_work is not None:
+            e = dataclasses.replace(e, work=e.work + extra_work)
+        volume = (crack_volume(f.u, f.z, f.integration_order) if base["pressurized"]
+                  else math.nan)
         crack = self.crack()
         tip, sizes = crack.tip, self.tracker.element_sizes(f)
         path_length = self._initial_length + crack.grown_length if f.mesh.dim == 2 else math.nan
@@ -313,7 +321,8 @@ class PhaseFieldStepper:
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
                           crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
                           path_length=path_length, n_damage_zones=crack.n_damage_zones,
-                          tip_z=float(tip[2]) if len(tip) > 2 else math.nan)
+                          tip_z=float(tip[2]) if len(tip) > 2 else math.nan,
+                          crack_volume=volume)
 
     def run(self, history_every: int | None = None) -> Iterator[StepRecord]:
         """Step to the end time, yielding one record per step.

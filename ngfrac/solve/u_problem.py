@@ -1,6 +1,7 @@
 """The u-sub-problem of one step: the degraded elastic equation for the current z.
 
-    alpha1 (u - u_prev)/dt = div((g(z) + eta) sigma[u]) + f      u = g_D(t) on Gamma_D
+    alpha1 (u - u_prev)/dt = div((g(z) + eta) sigma[u]) + f - p grad z     u = g_D(t) on Gamma_D
+                                                          sigma n = t_N(t) on Gamma_N
 
 One linear solve (a factorization made once per mesh and numerically updated after each
 assembly, or CG with BDDC), or Newton on the energy with a tension/compression split
@@ -16,11 +17,13 @@ import numpy as np
 import ngsolve as ngs
 
 from ..physics.crack_models import CrackModel
+from ..physics.elastic import traction_of
 from ..physics.splits import NewtonResult, NewtonSolver, make_split, tangent_integrators
 from ..scene import Scene
 from .linear import UOperator, register_preconditioner
 from .context import StepContext
 from .spaces import MeshFields, dx_of_order
+from .threads import integrate
 
 
 class SolverError(RuntimeError):
@@ -45,7 +48,7 @@ class DisplacementProblem:
 
     def __init__(self, fields: MeshFields, scene: Scene, model: Any, crack_model: CrackModel,
                  context: StepContext) -> None:
-        self.fields, self.model, self.context = fields, model, context
+        self.fields, self.model, self.context, self.scene = fields, model, context, scene
         time, inv_dt = context.time, context.inv_dt
         pf, disc = scene.phase_field, scene.discretization
         self.eta = pf.residual_stiffness
@@ -67,12 +70,48 @@ class DisplacementProblem:
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
                     if pf.alpha1 > 0 else None)
         self.body_force = model.body_force(scene.material, time)
-        # a body force is any expression: its quadrature keeps two orders above the forms'
-        dx_f = dx_of_order(fields.mesh, fields.integration_order + 2)
-        self.f_u = None if self.body_force is None else ngs.LinearForm(self.body_force * v * dx_f)
+        self.f_u = self._load_form(scene, v)
         self._newton = self._newton_solver(pf.alpha1) if self.split is not None else None
         self.indicators: dict = {}
         """Reaction test functions of this mesh (:func:`ngfrac.post.reactions.reaction`)."""
+
+    def _load_form(self, scene: Scene, v: Any) -> ngs.LinearForm | None:
+        """f_u: the body force, the tractions and pressures on the boundary (not degraded)
+        and the crack pressure ``-p grad z . v`` (the u-derivative of ``int p u.grad z``);
+        None when all are absent, so that scenes without them assemble nothing."""
+        f, time = self.fields, self.context.time
+        # a body force is any expression: its quadrature keeps two orders above the forms'
+        dx_f = dx_of_order(f.mesh, f.integration_order + 2)
+        terms = [] if self.body_force is None else [self.body_force * v * dx_f]
+        boundary = self.model.boundary_force(f.mesh, scene.loads, time, v)
+        if boundary is not None:
+            terms.append(boundary)
+        if scene.phase_field.pressurized:
+            p = scene.phase_field.crack_pressure.to_coefficient(time)
+            terms.append(-p * ngs.InnerProduct(ngs.grad(f.z), v) * f.dx)
+        if not terms:
+            return None
+        return ngs.LinearForm(sum(terms[1:], terms[0]))
+
+    def surface_work(self) -> float | None:
+        """The work of the tractions, pressures and the crack pressure at the current u and z,
+        ``int_Gamma_N t.u ds - int p u.grad z``, or None without any (E_total subtracts it
+        with the body force's work)."""
+        f, scene, time = self.fields, self.scene, self.context.time
+        boundary = [load for load in scene.loads if not load.is_dirichlet]
+        total = None
+        for load in boundary:
+            traction = traction_of(load, f.mesh, time)
+            density = traction * f.u if f.u.dim == 1 else ngs.InnerProduct(traction, f.u)
+            value = float(integrate(density, f.mesh, order=f.integration_order, vb=ngs.BND,
+                                    definedon=f.mesh.Boundaries(load.boundary)))
+            total = value if total is None else total + value
+        if scene.phase_field.pressurized:
+            p = scene.phase_field.crack_pressure.to_coefficient(time)
+            value = -float(integrate(p * ngs.InnerProduct(f.u, ngs.grad(f.z)), f.mesh,
+                                     order=f.integration_order))
+            total = value if total is None else total + value
+        return total
 
     @property
     def iterations(self) -> int:

@@ -41,10 +41,14 @@ class PhaseFieldProblem:
         W, the elastic drive (sigma:e at u_prev or u; 2 psi+ with a split).
     context : StepContext
         The step's 1/dt, threads and timer.
+    u_drive : ngsolve.GridFunction, optional
+        The u of the drive (u_prev or u); with ``phase_field.crack_pressure`` p the right-hand
+        side gets ``-p u_drive . grad w``, the z-derivative of the work term ``int p u.grad z``.
     """
 
     def __init__(self, fields: MeshFields, scene: Scene, crack_model: CrackModel, gamma: Any,
-                 drive: ngs.CoefficientFunction, context: StepContext) -> None:
+                 drive: ngs.CoefficientFunction, context: StepContext,
+                 u_drive: ngs.GridFunction | None = None) -> None:
         self.fields, self.context = fields, context
         inv_dt = context.inv_dt
         pf = scene.phase_field
@@ -62,6 +66,10 @@ class PhaseFieldProblem:
         self._fixed_assembled = False
         rhs = (pf.alpha2 * inv_dt * fields.z + drive) * w
         source = crack_model.source(w, gamma, eps)  # AT1: -3 gamma/(8 eps) w
+        if pf.pressurized and u_drive is not None:
+            pressure = -pf.crack_pressure.to_coefficient(context.time) \
+                * ngs.InnerProduct(u_drive, ngs.grad(w))
+            source = pressure if source is None else source + pressure
         self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inverse: Any = None
         self.shortened = 0

@@ -30,6 +30,9 @@ QUICK_EXTRA = {
                    "time.t_end=1.6e-2", "time.adaptive=false", "adaptivity.max_vertices=3000"],
     # 3D: fixed steps of 0.04 (75 steps) and at most 1,000 vertices, ~70-100 s.
     "box3d": ["time.dt=0.04", "time.adaptive=false", "adaptivity.max_vertices=1000"],
+    # Sneddon: eps/l0 = 0.2 with h = eps/4 in core and band (~4,000 vertices), 52 steps.
+    "sneddon": ["phase_field.epsilon=0.2", "adaptivity.h_crack=0.05", "adaptivity.h_band=0.05",
+                "adaptivity.max_vertices=8000", "time.dt=0.01", "time.t_end=0.52"],
 }
 """Per-demo quick overrides, applied after QUICK."""
 
@@ -240,10 +243,24 @@ def check_box3d(history):
     assert force[-1] < 0.8 * force[peak], f"no drop: peak {force[peak]:.4f}, end {force[-1]:.4f}"
 
 
+def check_sneddon(history):
+    # Sneddon's pressurized crack, V = 2 pi p l0^2 (1 - nu^2)/E with p = 1e-3 t. The crack is
+    # frozen (alpha2 = 1e7): z changes by < 1e-6. The volume is linear in p, so V/V_Sneddon is the
+    # same at every row. Measured (docs/theory.md, "Pressurized cracks"): 0.969 on the quick
+    # mesh (eps/l0 = 0.2, h_crack = eps/4); 5 % is the demo's target, and the table shows the
+    # quick value within it while finer epsilon at h = eps/4 falls below it.
+    assert np.nanmax(history["dz_max"][1:]) < 1e-6, "z changed: the crack was not frozen"
+    t = history["t"][1:]
+    exact = 2 * np.pi * 1e-3 * t * (1 - 0.3 ** 2)
+    ratio = history["crack_volume"][1:] / exact
+    assert np.all(np.abs(ratio - 1) < 0.05), ratio
+    assert np.ptp(ratio) < 1e-4, ratio  # linear in p (z rises by < 1e-7 a step: 1e-5 drift)
+
+
 CHECKS = {"mode3_slit": check_slit, "mode3_slit_at1": check_slit_at1, "mode3_stripes": check_stripes,
           "mode12_kink": check_mode12_kink, "mode12_stripes": check_mode12_stripes,
           "sent": check_sent, "sens": check_sens, "box3d": check_box3d,
-          "plate_hole": check_plate_hole}
+          "plate_hole": check_plate_hole, "sneddon": check_sneddon}
 
 
 def test_every_demo_has_a_test():
