@@ -20,7 +20,7 @@ from typing import Any, ClassVar, Iterable, Mapping, Sequence
 import numpy as np
 import ngsolve as ngs
 
-from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces
+from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces, generate_mesh
 
 __all__ = ["OccDomain", "BoundaryConflict", "name_boundaries", "shape_from_specs", "read_shape",
            "DEFAULT_BOUNDARY"]
@@ -184,16 +184,8 @@ class OccDomain:
         MeshingError
             Netgen failed; the message says what to change.
         """
-        if maxh <= 0:
-            raise ValueError(f"maxh must be > 0, got {maxh}")
-        try:
-            ngmesh = self.netgen_geometry(cracks).GenerateMesh(maxh=maxh)
-        except MeshingError:
-            raise
-        except Exception as err:  # netgen raises plain Exceptions for bad geometries
-            raise MeshingError(f"Netgen could not mesh the OCC shape with its cracks ({err}) at "
-                               f"maxh = {maxh:g}; change the cracks or the mesh size") from None
-        return ngs.Mesh(ngmesh)
+        return generate_mesh(self.netgen_geometry(cracks), maxh, "the OCC shape",
+                             "change the cracks or the mesh size")
 
     # -- points ----------------------------------------------------------------------------------
 

@@ -42,6 +42,21 @@ class MeshingError(RuntimeError):
     """
 
 
+def generate_mesh(geometry: Any, maxh: float, what: str, fix: str) -> ngs.Mesh:
+    """Netgen's quasi-uniform mesh of ``geometry`` at ``maxh``; a Netgen failure is a
+    :class:`MeshingError` naming ``what`` was meshed and how to ``fix`` it."""
+    if maxh <= 0:
+        raise ValueError(f"maxh must be > 0, got {maxh}")
+    try:
+        ngmesh = geometry.GenerateMesh(maxh=maxh)
+    except MeshingError:
+        raise
+    except Exception as err:  # netgen raises plain Exceptions for bad geometries
+        raise MeshingError(f"Netgen could not mesh {what} with its cracks ({err}) at "
+                           f"maxh = {maxh:g}; {fix}") from None
+    return ngs.Mesh(ngmesh)
+
+
 @runtime_checkable
 class Domain(Protocol):
     """What ngfrac needs of a domain: geometry with its cracks, boundaries, measure, points."""
@@ -184,17 +199,9 @@ class _AxisAligned:
         MeshingError
             Netgen failed; the message names the domain and what to change.
         """
-        if maxh <= 0:
-            raise ValueError(f"maxh must be > 0, got {maxh}")
-        try:
-            ngmesh = self.netgen_geometry(cracks).GenerateMesh(maxh=maxh)
-        except MeshingError:
-            raise
-        except Exception as err:  # netgen raises plain Exceptions for bad geometries
-            raise MeshingError(f"Netgen could not mesh the {self.kind} with its cracks ({err}) "
-                               f"at maxh = {maxh:g}; run ngfrac check on the scene, or change "
-                               f"the {self.CRACK_WORDS} or the mesh size") from None
-        return ngs.Mesh(ngmesh)
+        return generate_mesh(self.netgen_geometry(cracks), maxh, f"the {self.kind}",
+                             f"run ngfrac check on the scene, or change the {self.CRACK_WORDS} "
+                             "or the mesh size")
 
 
 @dataclass(frozen=True)

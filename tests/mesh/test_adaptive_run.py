@@ -105,8 +105,11 @@ def test_transfers_keep_the_crack_length(adaptive_run):
     assert max(drops) < 0.005, max(drops)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known defect (issue #13): under this binding cap (2,500) the last mesh after the crack cut "
+@pytest.mark.xfail(strict=False, reason=(
+    "known defect (issue #13), pinned deterministically by tests/mesh/test_meshing.py::"
+    "test_cap_keeps_the_core_finer_than_the_far_field_when_the_finest_sizes_overflow; whether "
+    "this run's last mesh meets it depends on its trajectory (with the forms' quadrature of "
+    "exact degree it did not, on this machine): under this binding cap (2,500) the last mesh after the crack cut "
     "the plate leaves its core near the far edge on elements of ~0.06-0.09: the finest sizes "
     "(hmin-floored estimator spots, h_lo) alone exceed the cap, so meshing.cap_vertices goes "
     "to stage 2, which scales the {h_lo, hmax} field of stage 1 at lambda = 8 and sends the "
