@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from functools import cached_property
 from typing import Any, Iterator
 
 import numpy as np
@@ -349,9 +350,10 @@ class PhaseFieldStepper:
     time = property(lambda self: self.context.time, doc="The time Parameter of the step.")
     inv_dt = property(lambda self: self.context.inv_dt, doc="The 1/dt Parameter of the step.")
 
-    @property
+    @cached_property
     def gamma(self) -> Any:
-        """The toughness: a number when constant (no coefficient evaluation in the forms)."""
+        """The toughness: a number when constant (no coefficient evaluation in the forms);
+        built once (the forms of every mesh and the energies share it)."""
         gamma = self.scene.material.gamma
         return gamma.value() if gamma.is_constant else gamma.to_coefficient()
 
