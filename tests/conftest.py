@@ -20,6 +20,16 @@ def pytest_sessionstart(session):
     ngfrac.set_threads()
 
 
+@pytest.fixture(scope="module")
+def one_thread():
+    """One NGSolve thread for a module (its worker threads busy-wait: one is faster on a
+    shared machine), then the configured count again (NGFRAC_THREADS)."""
+    from ngfrac.solve.threads import serial
+
+    with serial():
+        yield
+
+
 def pytest_collection_modifyitems(config, items):
     if config.getoption("--runslow"):
         return

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-import ngsolve as ngs
 import pytest
 
 from ngfrac.io.checkpoint import (FORMAT_VERSION, CheckpointError, load_checkpoint, restore, resume,
@@ -27,12 +26,7 @@ N_STEPS, CHECKPOINT_AT = 20, 10
 COMPARED = ("E_total", "crack_length", "tip_x", "tip_y")
 
 
-@pytest.fixture(scope="module", autouse=True)
-def single_thread():
-    """NGSolve's worker threads busy-wait; one thread is faster on a shared machine."""
-    ngs.SetNumThreads(1)
-    yield
-    ngs.SetNumThreads(os.cpu_count() or 1)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 @pytest.fixture(scope="module")

@@ -17,12 +17,7 @@ from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
 from ngfrac.testing.scenes import quick_slit
 
 
-@pytest.fixture(scope="module", autouse=True)
-def single_thread():
-    """NGSolve's worker threads busy-wait; one thread is faster on a shared machine."""
-    ngs.SetNumThreads(1)
-    yield
-    ngs.SetNumThreads(os.cpu_count() or 1)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 @pytest.fixture(scope="module")

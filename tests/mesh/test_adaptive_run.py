@@ -1,12 +1,11 @@
 """A full adaptive run of the slit demo (quick sizes): cap, hmin, bounds, transfers."""
-import os
 
-import ngsolve as ngs
 import numpy as np
 import pytest
 
 from ngfrac.mesh.adapter import AdaptivitySizes
 from ngfrac.solve.stepper import PhaseFieldStepper
+from ngfrac.solve.threads import serial
 from ngfrac.mesh.transfer import evaluate, locate
 
 from ngfrac.testing.scenes import demo_data, scene_from
@@ -46,11 +45,8 @@ def adaptive_run():
     had cut the plate; since then four two-thread runs had 11-13 changes and at most 0.20 %
     (issue #3's note has the command).
     """
-    ngs.SetNumThreads(1)
-    try:
+    with serial():
         return _adaptive_run()
-    finally:
-        ngs.SetNumThreads(int(os.environ.get("NGFRAC_THREADS") or os.cpu_count() or 1))
 
 
 def _adaptive_run():

@@ -159,10 +159,9 @@ def plate_scene(**adaptivity):
         "output": {"vtk_every": 0}})
 
 
-def test_short_adaptive_run_on_the_plate_with_a_hole():
+def test_short_adaptive_run_on_the_plate_with_a_hole(one_thread):
     from ngfrac.solve.stepper import PhaseFieldStepper
 
-    ngs.SetNumThreads(1)
     scene = plate_scene()
     stepper = PhaseFieldStepper(scene)
     records = list(stepper.run())
@@ -265,10 +264,9 @@ def test_brep_file_keeps_the_shape_not_the_names(tmp_path):
     assert set(again.boundary_names) == set(domain.boundary_names)  # named again by selectors
 
 
-def test_nucleation_run_without_cracks():
+def test_nucleation_run_without_cracks(one_thread):
     from ngfrac.solve.stepper import PhaseFieldStepper
 
-    ngs.SetNumThreads(1)
     scene = Scene.from_dict({**plate_scene().to_dict(), "cracks": []})
     stepper = PhaseFieldStepper(scene)
     for _ in stepper.run():
@@ -289,10 +287,9 @@ def test_copies_of_an_occ_geometry_build_their_own_domain():
 
 
 @pytest.mark.slow
-def test_3d_adaptive_run_on_a_box_with_a_cylindrical_hole():
+def test_3d_adaptive_run_on_a_box_with_a_cylindrical_hole(one_thread):
     from ngfrac.solve.stepper import PhaseFieldStepper
 
-    ngs.SetNumThreads(1)
     scene = Scene.from_dict({
         "model": {"kind": "elasticity_3d"}, "material": {"E": 1.0, "nu": 0.3},
         "geometry": {"kind": "occ", "shapes": [

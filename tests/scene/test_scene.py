@@ -2,13 +2,13 @@
 import copy
 import dataclasses
 
-import ngsolve as ngs
 import numpy as np
 import pytest
 
 from ngfrac import PhaseFieldStepper
 from ngfrac.scene.expressions import Expression
 from ngfrac.io.output import to_toml
+from ngfrac.solve.threads import serial
 from ngfrac.scene import (Components, Crack, Discretization, Geometry, Load, Material, Model, Output,
                           PhaseField, Scene, SceneError, TimeSettings, apply_overrides, load_scene)
 
@@ -248,12 +248,8 @@ def test_scene_built_in_code_runs_like_the_same_scene_from_toml(tmp_path):
     path.write_text(CODE_TOML)
     from_toml, in_code = load_scene(path), code_scene()
     assert in_code == from_toml
-    threads = ngs.GetNumThreads()
-    ngs.SetNumThreads(1)
-    try:
+    with serial():  # one thread, then the configured count again
         histories = [list(PhaseFieldStepper(scene).run()) for scene in (in_code, from_toml)]
-    finally:
-        ngs.SetNumThreads(threads)
     a, b = histories
     assert len(a) == len(b) == 3
     names = a[0].header()

@@ -3,22 +3,12 @@ non-decreasing at the nodes, and E_total non-increasing while the load is held o
 mesh; each case also shows one physical fact. The cases are in ngfrac/testing/stress_cases.py;
 benchmarks/stress_table.py prints the measured table of docs/stress.md."""
 import functools
-import os
 
-import ngsolve as ngs
 import pytest
 
 from ngfrac.testing import stress_cases as sc
 
-pytestmark = pytest.mark.stress
-
-
-@pytest.fixture(scope="module", autouse=True)
-def single_thread():
-    """NGSolve's worker threads busy-wait; one thread is faster on a shared machine."""
-    ngs.SetNumThreads(1)
-    yield
-    ngs.SetNumThreads(os.cpu_count() or 1)
+pytestmark = [pytest.mark.stress, pytest.mark.usefixtures("one_thread")]
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,22 +1,13 @@
 """A solver failure in the middle of a run raises a SolverError that says what to change, and
 the last checkpoint stays valid: it loads, and a restart from it finishes the run exactly."""
-import os
 
-import ngsolve as ngs
 import pytest
 
 from ngfrac.runner import CHECKPOINT
 
 from ngfrac.testing import stress_cases as sc
 
-pytestmark = pytest.mark.stress
-
-
-@pytest.fixture(scope="module", autouse=True)
-def single_thread():
-    ngs.SetNumThreads(1)
-    yield
-    ngs.SetNumThreads(os.cpu_count() or 1)
+pytestmark = [pytest.mark.stress, pytest.mark.usefixtures("one_thread")]
 
 
 @pytest.fixture(scope="module", params=["u", "z"])
