@@ -723,6 +723,10 @@ class TimeSettings(_Section):
         return 2 ** self.max_doublings if self.adaptive else 1
 
 
+Z_UPDATES = ("auto", "projection", "descent", "obstacle")
+"""The values of ``discretization.z_update``."""
+
+
 @dataclass(frozen=True)
 class Discretization(_Section):
     """Finite elements and solvers.
@@ -734,7 +738,9 @@ class Discretization(_Section):
     ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
-    an energy descent. ``threaded_solves = false`` (the default) runs factorizations and
+    an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
+    (an active-set method); ``"auto"`` (the default) is ``"projection"`` for AT2 and
+    ``"obstacle"`` for AT1. ``threaded_solves = false`` (the default) runs factorizations and
     solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
     thread count (:mod:`ngfrac.solve.threads`); ``true`` threads them too.
     """
@@ -745,7 +751,7 @@ class Discretization(_Section):
     u_solver: str = "sparsecholesky"
     z_solver: str = "sparsecholesky"
     coupling: str = "paper"
-    z_update: str = "projection"
+    z_update: str = "auto"
     threaded_solves: bool = False
 
     def validate(self) -> None:
@@ -759,9 +765,18 @@ class Discretization(_Section):
                  self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
         _require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
                  "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
-        _require(self.z_update in ("projection", "descent"), s, "z_update", self.z_update,
-                 "choose 'projection' (the paper's min(1, max(z_trial, z_old))) or 'descent' "
-                 "(the projection, shortened where it would raise the z-step's energy)")
+        _require(self.z_update in Z_UPDATES, s, "z_update", self.z_update,
+                 "choose 'auto', 'projection' (the paper's min(1, max(z_trial, z_old))), "
+                 "'descent' (the projection, shortened where it would raise the z-step's "
+                 "energy) or 'obstacle' (the z-step minimized under z >= z_old)")
+
+    def z_update_for(self, crack_model: str) -> str:
+        """The z-update a run uses: ``"auto"`` is the paper's projection for AT2 and the
+        bound-constrained solve for AT1 (whose unconstrained z-step is far below the bound
+        wherever the material is intact: :mod:`ngfrac.solve.obstacle`)."""
+        if self.z_update != "auto":
+            return self.z_update
+        return "obstacle" if crack_model == "AT1" else "projection"
 
     @property
     def z_order(self) -> int:

@@ -111,6 +111,27 @@ class LagrangeNodes:
         mean = 0.5 * (vert[self.edge_vertices[:, 0]] + vert[self.edge_vertices[:, 1]])
         coeffs[self._edge_dofs] = self._edge_coefficients(mean, node_values[self.nv:])
 
+    def coefficient_matrix(self) -> "scipy.sparse.csr_matrix":
+        """The sparse map T from node values to the space's coefficients (``c = T v``).
+
+        Identity for P1; for P2 ``c_e = (v_e - (v_a + v_b)/2) / beta`` on each edge. A
+        matrix ``A`` and vector ``f`` of the space become ``T^T A T`` and ``T^T f`` in the
+        node basis, where bounds at the nodes are bounds on single unknowns.
+        """
+        import scipy.sparse as sp
+
+        n = self.n_nodes
+        if self.order == 1:
+            return sp.identity(n, format="csr")
+        ne = len(self.edge_vertices)
+        edges = self.nv + np.arange(ne)
+        rows = np.concatenate([np.arange(self.nv), edges, edges, edges])
+        cols = np.concatenate([np.arange(self.nv), edges, self.edge_vertices[:, 0],
+                               self.edge_vertices[:, 1]])
+        vals = np.concatenate([np.ones(self.nv), np.full(ne, 1.0 / self.beta),
+                               np.full(2 * ne, -0.5 / self.beta)])
+        return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+
     def _edge_coefficients(self, mean: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Edge coefficients whose midpoint values, as :meth:`values` computes them, are
         at least ``target`` and, where ``target <= 1``, at most 1.

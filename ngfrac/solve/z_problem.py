@@ -19,6 +19,7 @@ from ngsolve.krylovspace import CGSolver
 from ..physics.crack_models import CrackModel
 from ..scene import Scene
 from .context import StepContext
+from .obstacle import node_system, solve_lower_obstacle
 from .spaces import MeshFields
 from .threads import parallel
 from .u_problem import SolverError
@@ -53,7 +54,8 @@ class PhaseFieldProblem:
         inv_dt = context.inv_dt
         pf = scene.phase_field
         self.alpha2, self.solver = pf.alpha2, scene.discretization.z_solver
-        self.descent = scene.discretization.z_update == "descent"
+        update = scene.discretization.z_update_for(crack_model.name)
+        self.descent, self.obstacle = update == "descent", update == "obstacle"
         self.z_trial = ngs.GridFunction(fields.fes_z, "z_trial")
         zt, w = fields.fes_z.TnT()
         dx, eps = fields.dx, pf.epsilon
@@ -72,17 +74,24 @@ class PhaseFieldProblem:
             source = pressure if source is None else source + pressure
         self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inverse: Any = None
+        self._to_coefficients: Any = None  # node values -> coefficients (obstacle only)
+        self._active: np.ndarray | None = None  # the last obstacle solve's active set
         self.shortened = 0
         """Projections the descent shortened (``discretization.z_update = "descent"``)."""
 
     def solve(self, step: int | str = "?") -> int:
         """The z-sub-step into :attr:`z_trial`; returns the CG iterations (0 for a direct
-        solve). Raises :class:`SolverError`."""
+        solve; the active-set iterations with ``z_update = "obstacle"``). Raises
+        :class:`SolverError`."""
         with self.context.timer.phase("z: assemble"), parallel():
             self._assemble_matrix()
             self.f_z.Assemble()
-        with self.context.timer.phase("z: solve"), self.context.threads.solves():
-            iterations = self._solve_system(step)
+        if self.obstacle:
+            with self.context.timer.phase("z: obstacle solve"), self.context.threads.solves():
+                iterations = self._solve_obstacle()
+        else:
+            with self.context.timer.phase("z: solve"), self.context.threads.solves():
+                iterations = self._solve_system(step)
         if not np.all(np.isfinite(self.z_trial.vec.FV().NumPy())):
             raise SolverError(f"the z-solve gave non-finite values at step {step}; lower time.dt")
         return iterations
@@ -117,6 +126,24 @@ class PhaseFieldProblem:
             self._inverse.Update()
         self.z_trial.vec.data = self._inverse * self.f_z.vec
         return 0
+
+    def _solve_obstacle(self) -> int:
+        """The sub-step as min of its quadratic energy over z >= z_old at the nodes
+        (:mod:`ngfrac.solve.obstacle`); the minimizer goes to :attr:`z_trial`."""
+        nodes = self.fields.nodes
+        if self._to_coefficients is None:
+            self._to_coefficients = nodes.coefficient_matrix()
+        matrix, rhs = node_system(self.a_z.mat, self.f_z.vec, self._to_coefficients)
+        lower = nodes.values(self.fields.z)
+        active = self._active
+        if active is None:  # first guess: where the energy's slope at z_old pushes z down
+            active = matrix @ lower - rhs > 0
+        solution = solve_lower_obstacle(matrix, rhs, lower, active)
+        self._active = solution.active
+        if not solution.converged:
+            self.context.timer.add("z: unsettled active sets", 0.0)
+        nodes.assign(self.z_trial, solution.values)
+        return solution.iterations
 
     def trial_values(self) -> np.ndarray:
         """The sub-step's solution at the Lagrange nodes."""

@@ -23,6 +23,18 @@ onset is the load at which the tip has moved 2 epsilon beyond the initial one. (
 starts to creep forward near the sharp-crack value sqrt(2 H gamma/mu), as the process zone of
 the initial band forms, and runs away a little above the prediction: 2 epsilon of advance
 marks the middle of that range.)
+
+AT1 (``phase_field.model = "AT1"``): the far field stays intact (its strength
+W_c = 3 gamma/(8 eps) = 9.4 is far above mu (Delta/H)^2 ~ 2 at eps/H = 0.04), and the band
+costs gamma (1 + 3 h/(16 eps)) for P2 z: a z = 1 core one element wide adds
+(3/8)(h/eps) gamma, half of it for P2 as for AT2 above (+1.9% at h = eps/10); its halo lies
+inside the band (it damages where mu |grad u|^2 = G/(pi r) exceeds W_c, r < 0.85 eps, while
+the band is 2 eps wide), so there is no wake term: Delta_c = sqrt(2 H gamma_eff/mu) with
+gamma_eff = 1.019 gamma. The paper's scheme advances a tip by a fraction of epsilon per step
+(test_surfing.py), so a ramp measures the onset plus the time to grow 2 epsilon; for AT1 that
+delay was 10% of Delta_c at 0.3% of load per step. The AT1 test holds the load instead and
+brackets the onset: at 0.95 Delta_c the crack stops (no growth in the second half of the
+run), at 1.05 Delta_c it keeps growing.
 """
 from __future__ import annotations
 
@@ -112,3 +124,43 @@ def test_strip_onset_coarse():
 def test_strip_onset_fine():
     """epsilon/H = 0.02 (the far-field correction is 4%)."""
     check_onset(0.02, max_vertices=8000)
+
+
+AT1_HELD_STEPS = 80
+
+
+def at1_gamma_eff() -> float:
+    """AT1's band for P2 z: gamma (1 + 3 h/(16 eps)) (module docstring); no wake."""
+    return GAMMA * (1 + 3 * HMIN_RATIO / 16)
+
+
+def held_growth(eps: float, delta: float, H: float = 1.0) -> tuple[float, float]:
+    """Hold Delta on the AT1 strip; return the tip advance and the surface-energy increase
+    over the second half of the run."""
+    scene = strip_scene(eps, H, 2.5 * H, 1.0 * H, delta, 0.0, AT1_HELD_STEPS, HMIN_RATIO * eps,
+                        4000, model="AT1")
+    rows = [(record.tip_x, record.E_surf) for record in PhaseFieldStepper(scene).run()]
+    (tip_half, surf_half), (tip_end, surf_end) = rows[len(rows) // 2], rows[-1]
+    return tip_end - tip_half, surf_end - surf_half
+
+
+@pytest.mark.parametrize("factor, grows", [(0.95, False), (1.05, True)])
+def test_at1_strip_onset_bracketed_within_5_percent(factor, grows):
+    """AT1, eps/H = 0.04, the load held at 0.95 and 1.05 of Griffith's Delta_c.
+
+    Measured (z_update = "obstacle", the AT1 default): at 0.95 the tip does not move and
+    E_surf is constant to 1e-6 over the second half; at 1.05 the tip advances 0.047
+    (1.2 eps) and E_surf grows 0.07 over it. Thresholds: growth means more than eps/4 of tip
+    advance and more than gamma eps/4 of surface energy; arrest means less than a tenth of
+    that. (Before the obstacle solve, the projected z-step did not move the tip even at
+    1.13 Delta_c.)
+    """
+    eps = 0.04
+    predicted = math.sqrt(2 * 1.0 * at1_gamma_eff() / MU)
+    advance, surface = held_growth(eps, factor * predicted)
+    message = (f"Delta = {factor} Delta_c = {factor * predicted:.4f}: second-half tip advance "
+               f"{advance:.4f}, E_surf increase {surface:.5f} (eps = {eps})")
+    if grows:
+        assert advance > eps / 4 and surface > GAMMA * eps / 4, message
+    else:
+        assert advance < eps / 40 and surface < GAMMA * eps / 40, message
