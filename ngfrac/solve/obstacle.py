@@ -25,10 +25,14 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+
+if TYPE_CHECKING:
+    from .nodal import LagrangeNodes
 
 LOG = logging.getLogger(__name__)
 
@@ -61,6 +65,36 @@ class ObstacleSolution:
     active: np.ndarray
     iterations: int
     converged: bool
+
+
+class NodalObstacle:
+    """The z-step under ``z >= z_old`` at the nodes of one space, warm-started from the
+    last step's active set (one object per mesh).
+
+    Parameters
+    ----------
+    nodes : ngfrac.solve.nodal.LagrangeNodes
+        The nodes of the z-space.
+    """
+
+    def __init__(self, nodes: "LagrangeNodes") -> None:
+        self.nodes = nodes
+        self._to_coefficients = nodes.coefficient_matrix()
+        self._active: np.ndarray | None = None
+
+    def solve(self, ngs_matrix: object, ngs_rhs: object, z_old: object,
+              result: object) -> ObstacleSolution:
+        """Minimize the quadratic form of the assembled matrix and right-hand side over
+        node values ``>= z_old``'s; the minimizer goes to the GridFunction ``result``."""
+        matrix, rhs = node_system(ngs_matrix, ngs_rhs, self._to_coefficients)
+        lower = self.nodes.values(z_old)
+        active = self._active
+        if active is None:  # first guess: where the energy's slope at z_old pushes z down
+            active = matrix @ lower - rhs > 0
+        solution = solve_lower_obstacle(matrix, rhs, lower, active)
+        self._active = solution.active
+        self.nodes.assign(result, solution.values)
+        return solution
 
 
 def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarray,

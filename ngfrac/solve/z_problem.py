@@ -19,7 +19,7 @@ from ngsolve.krylovspace import CGSolver
 from ..physics.crack_models import CrackModel
 from ..scene import Scene
 from .context import StepContext
-from .obstacle import node_system, solve_lower_obstacle
+from .obstacle import NodalObstacle
 from .spaces import MeshFields
 from .threads import parallel
 from .u_problem import SolverError
@@ -74,8 +74,7 @@ class PhaseFieldProblem:
             source = pressure if source is None else source + pressure
         self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inverse: Any = None
-        self._to_coefficients: Any = None  # node values -> coefficients (obstacle only)
-        self._active: np.ndarray | None = None  # the last obstacle solve's active set
+        self._obstacle = NodalObstacle(fields.nodes) if self.obstacle else None
         self.shortened = 0
         """Projections the descent shortened (``discretization.z_update = "descent"``)."""
 
@@ -130,19 +129,9 @@ class PhaseFieldProblem:
     def _solve_obstacle(self) -> int:
         """The sub-step as min of its quadratic energy over z >= z_old at the nodes
         (:mod:`ngfrac.solve.obstacle`); the minimizer goes to :attr:`z_trial`."""
-        nodes = self.fields.nodes
-        if self._to_coefficients is None:
-            self._to_coefficients = nodes.coefficient_matrix()
-        matrix, rhs = node_system(self.a_z.mat, self.f_z.vec, self._to_coefficients)
-        lower = nodes.values(self.fields.z)
-        active = self._active
-        if active is None:  # first guess: where the energy's slope at z_old pushes z down
-            active = matrix @ lower - rhs > 0
-        solution = solve_lower_obstacle(matrix, rhs, lower, active)
-        self._active = solution.active
+        solution = self._obstacle.solve(self.a_z.mat, self.f_z.vec, self.fields.z, self.z_trial)
         if not solution.converged:
             self.context.timer.add("z: unsettled active sets", 0.0)
-        nodes.assign(self.z_trial, solution.values)
         return solution.iterations
 
     def trial_values(self) -> np.ndarray:
