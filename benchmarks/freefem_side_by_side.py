@@ -252,6 +252,23 @@ def time_to_accuracy(points: list[tuple[float, float]], target: float) -> tuple[
     return math.nan, "not reached"
 
 
+def monotonicity(rows: list[dict]) -> list[str]:
+    """One line per tool: is each phase's largest error non-increasing as the cap grows?"""
+    lines = []
+    for tool in ("ngfrac", "FreeFEM"):
+        mine = sorted((r for r in rows if r["tool"] == tool), key=lambda r: r["cap"])
+        if len(mine) < 2:
+            continue
+        parts = []
+        for key, name in (("max_max", "overall"), ("during_max", "propagation"), ("after_max", "after separation")):
+            errors = [r[key] for r in mine]
+            rises = [f"{a['cap']}->{b['cap']}" for a, b in zip(mine, mine[1:]) if b[key] > a[key]]
+            parts.append(f"{name} {'monotone' if not rises else 'rises at ' + ', '.join(rises)} "
+                         f"({' / '.join(_pct(e) for e in errors)})")
+        lines.append(f"- {tool}, error over caps {', '.join(str(r['cap']) for r in mine)}: " + "; ".join(parts))
+    return lines
+
+
 def _pct(x: float) -> str:
     return "–" if not np.isfinite(x) else f"{100 * x:.2f} %"
 
@@ -271,9 +288,11 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--out", type=Path, help="folder for histories, the cached reference, the table")
     parser.add_argument("--fresh-reference", action="store_true")
+    parser.add_argument("--tools", nargs="+", choices=("FreeFEM", "ngfrac"), default=["FreeFEM", "ngfrac"],
+                        help="run only these (ngfrac alone: the monotonicity over caps, no FreeFEM needed)")
     args = parser.parse_args()
 
-    command = freefem_command()
+    command = freefem_command() if "FreeFEM" in args.tools else []
     if command is None:
         print("FreeFEM++ is not installed (no FreeFem++ on PATH; Debian: apt-get install freefem++): "
               "the side-by-side benchmark is skipped.")
@@ -301,7 +320,7 @@ def main() -> None:
     rows, notes = [], []
     for cap in caps:
         scene = load_scene(args.scene, common + [f"adaptivity.max_vertices={cap}"])
-        for tool in ("FreeFEM", "ngfrac"):
+        for tool in [t for t in ("FreeFEM", "ngfrac") if t in args.tools]:
             print(f"{tool} cap {cap} ...", flush=True)
             if tool == "FreeFEM":
                 data, cpu, wall = run_freefem(command, scene, out / f"freefem_cap{cap}.csv")
@@ -360,7 +379,7 @@ def main() -> None:
             parts.append(f"{clock.upper() if clock == 'cpu' else clock}: ngfrac {shown(tn, nn)}, "
                          f"FreeFEM {shown(tf, nf)}, ratio ngfrac/FreeFEM {text}")
         lines.append(f"- time to {100 * target:g} % max crack-length error: " + "; ".join(parts))
-    lines += ["", *[f"- {n}" for n in notes]]
+    lines += ["", *[f"- {n}" for n in notes], *monotonicity(rows)]
     text = "\n".join(lines)
     (out / "table.md").write_text(text + "\n")
     print()
