@@ -38,6 +38,10 @@ class CrackModel:
     ----------
     name : str
         The scene's ``phase_field.model``.
+    z_update : str
+        The z-update of ``discretization.z_update = "auto"``: ``"projection"`` (the paper's)
+        or ``"obstacle"`` (the z-step minimized under z >= z_old) where the unconstrained
+        sub-step leaves the admissible set by far.
     c_w : float
         The normalization of the surface density, ``w = (alpha(z)/eps + eps |grad z|^2) / c_w``
         with ``c_w = 4 int_0^1 sqrt(alpha(s)) ds``: ``alpha(z) = z^2``, c_w = 2 (AT2) or
@@ -46,6 +50,8 @@ class CrackModel:
 
     name = ""
     c_w = math.nan
+    z_update = "projection"
+    """What ``discretization.z_update = "auto"`` means for this model."""
 
     def degradation(self, z: Any, eta: float) -> Any:
         """``g(z) = (1 - z)^2 + eta``, the factor of the elastic energy (z a
@@ -101,6 +107,7 @@ class AT1(CrackModel):
 
     name = "AT1"
     c_w = 8.0 / 3.0
+    z_update = "obstacle"  # the unconstrained z-step is far below z_old: ngfrac/solve/obstacle.py
 
     def surface_density(self, z: Any, epsilon: float) -> ngs.CoefficientFunction:
         return 0.375 * (z / epsilon + epsilon * ngs.InnerProduct(ngs.grad(z), ngs.grad(z)))

@@ -739,7 +739,7 @@ class Discretization(_Section):
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
     an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
-    (an active-set method); ``"auto"`` (the default) is ``"projection"`` for AT2 and
+    (an active-set method); ``"auto"`` (the default) is the crack model's choice: ``"projection"`` for AT2 and
     ``"obstacle"`` for AT1. ``threaded_solves = false`` (the default) runs factorizations and
     solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
     thread count (:mod:`ngfrac.solve.threads`); ``true`` threads them too.
@@ -769,14 +769,6 @@ class Discretization(_Section):
                  "choose 'auto', 'projection' (the paper's min(1, max(z_trial, z_old))), "
                  "'descent' (the projection, shortened where it would raise the z-step's "
                  "energy) or 'obstacle' (the z-step minimized under z >= z_old)")
-
-    def z_update_for(self, crack_model: str) -> str:
-        """The z-update a run uses: ``"auto"`` is the paper's projection for AT2 and the
-        bound-constrained solve for AT1 (whose unconstrained z-step is far below the bound
-        wherever the material is intact: :mod:`ngfrac.solve.obstacle`)."""
-        if self.z_update != "auto":
-            return self.z_update
-        return "obstacle" if crack_model == "AT1" else "projection"
 
     @property
     def z_order(self) -> int:

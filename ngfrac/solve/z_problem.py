@@ -54,7 +54,9 @@ class PhaseFieldProblem:
         inv_dt = context.inv_dt
         pf = scene.phase_field
         self.alpha2, self.solver = pf.alpha2, scene.discretization.z_solver
-        update = scene.discretization.z_update_for(crack_model.name)
+        update = scene.discretization.z_update
+        if update == "auto":
+            update = crack_model.z_update
         self.descent, self.obstacle = update == "descent", update == "obstacle"
         self.z_trial = ngs.GridFunction(fields.fes_z, "z_trial")
         zt, w = fields.fes_z.TnT()
