@@ -739,8 +739,8 @@ class Discretization(_Section):
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
     an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
-    (an active-set method); ``"auto"`` (the default) is the crack model's choice: ``"projection"`` for AT2 and
-    ``"obstacle"`` for AT1. ``threaded_solves = false`` (the default) runs factorizations and
+    (an active-set method); ``"auto"`` (the default) is the crack model's choice:
+    ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the default) runs factorizations and
     solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
     thread count (:mod:`ngfrac.solve.threads`); ``true`` threads them too.
     """
