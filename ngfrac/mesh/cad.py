@@ -198,6 +198,19 @@ class OccDomain:
         return generate_mesh(self.netgen_geometry(cracks), maxh, "the OCC shape",
                              "change the cracks or the mesh size")
 
+    def curve(self, mesh: ngs.Mesh, order: int, cracks: Any = ()) -> None:
+        """Curve ``mesh`` (a mesh of this domain with these cracks) to ``order``.
+
+        A mesh rebuilt from a file (a checkpoint: :class:`ngfrac.io.hdf5.MeshArrays`) has no
+        geometry; it gets this domain's, with the cracks glued in as when it was meshed, so
+        that Netgen finds the curved edges (faces) by the numbers the file kept.
+        """
+        from netgen import occ
+
+        if not isinstance(mesh.ngmesh.GetGeometry(), occ.OCCGeometry):
+            mesh.ngmesh.SetGeometry(self.netgen_geometry(cracks))
+        mesh.Curve(order)
+
     # -- points ----------------------------------------------------------------------------------
 
     def _boundary_compound(self) -> Any:
