@@ -57,6 +57,10 @@ class MeshArrays:
     boundaries : tuple of str
     facet_domains : (len(boundaries), 2) int32
         3D: the inside and outside domain of each face descriptor (0 = none); 2D: unused.
+    geometry_numbers : (len(boundaries),) int32
+        The geometry's edge (2D) or face (3D) number of each boundary (edge or face
+        descriptor), so that a rebuilt mesh given its geometry again can be curved again
+        (:meth:`ngfrac.mesh.cad.OccDomain.curve`); empty when unknown (files written before).
     """
 
     coordinates: np.ndarray
@@ -67,6 +71,7 @@ class MeshArrays:
     facet_index: np.ndarray
     boundaries: tuple[str, ...]
     facet_domains: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int32))
+    geometry_numbers: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
 
     @property
     def dim(self) -> int:
@@ -86,6 +91,7 @@ class MeshArrays:
             cells, facets = ng.Elements2D().NumPy(), ng.Elements1D().NumPy()
             boundaries = tuple(mesh.GetBoundaries())  # by segment index
             domains = np.zeros((0, 2), dtype=np.int32)
+            numbers = [ng.EdgeDescriptor(i + 1).edgenr for i in range(ng.GetNED())]
         elif dim == 3:
             # Surface elements refer to face descriptors, which carry name and neighbours.
             cells, facets = ng.Elements3D().NumPy(), ng.Elements2D().NumPy()
@@ -93,6 +99,7 @@ class MeshArrays:
             boundaries = tuple(fd.bcname for fd in descriptors)
             domains = np.array([(fd.domin, fd.domout) for fd in descriptors],
                                dtype=np.int32).reshape(-1, 2)
+            numbers = [fd.surfnr for fd in descriptors]
         else:
             raise ResultsError(f"cannot store a {dim}D mesh; only 2D and 3D meshes are supported")
         return cls(coordinates=np.array(ng.Coordinates(), dtype=np.float64)[:, :dim],
@@ -101,7 +108,9 @@ class MeshArrays:
                    materials=tuple(mesh.GetMaterials()),
                    facets=_simplices(facets["nodes"], dim, "boundary elements"),
                    facet_index=np.asarray(facets["index"], dtype=np.int32),
-                   boundaries=boundaries, facet_domains=domains)
+                   boundaries=boundaries, facet_domains=domains,
+                   geometry_numbers=np.array(numbers if len(numbers) == len(boundaries) else [],
+                                             dtype=np.int32))
 
     def to_mesh(self) -> ngs.Mesh:
         """Rebuild the mesh: same vertex and element order, so NGSolve numbers alike."""
@@ -110,13 +119,17 @@ class MeshArrays:
         ng.AddPoints(np.ascontiguousarray(self.coordinates, dtype=np.float64))
         for name in self.materials:
             ng.AddRegion(name, dim=dim)
+        numbers = (self.geometry_numbers.tolist() if len(self.geometry_numbers)
+                   else list(range(1, len(self.boundaries) + 1)))
         if dim == 2:
-            for name in self.boundaries:
+            for i, name in enumerate(self.boundaries):
                 ng.AddRegion(name, dim=1)
+                if len(self.geometry_numbers):  # the edge of the geometry it lies on
+                    ng.EdgeDescriptor(i + 1).edgenr = numbers[i]
         else:
             for i, (name, (inside, outside)) in enumerate(zip(self.boundaries, self.facet_domains)):
-                ng.Add(ngm.FaceDescriptor(surfnr=i + 1, domin=int(inside), domout=int(outside),
-                                          bc=i + 1))
+                ng.Add(ngm.FaceDescriptor(surfnr=numbers[i], domin=int(inside),
+                                          domout=int(outside), bc=i + 1))
                 ng.SetBCName(i, name)
         # Runs of equal region number keep the element order (and so the numbering) intact.
         for index, block in _runs(self.cell_index, self.cells):
@@ -130,13 +143,15 @@ class MeshArrays:
         return (self.materials == other.materials and self.boundaries == other.boundaries
                 and all(np.array_equal(getattr(self, name), getattr(other, name))
                         for name in ("coordinates", "cells", "cell_index", "facets",
-                                     "facet_index", "facet_domains")))
+                                     "facet_index", "facet_domains", "geometry_numbers")))
 
     def write(self, group: h5py.Group) -> None:
         """Store the arrays in an (empty) HDF5 group."""
         group.attrs["dim"] = self.dim
         for name in ("coordinates", "cells", "cell_index", "facets", "facet_index", "facet_domains"):
             group.create_dataset(name, data=getattr(self, name), fletcher32=True)
+        if len(self.geometry_numbers):
+            group.create_dataset("geometry_numbers", data=self.geometry_numbers, fletcher32=True)
         group["coordinates"].attrs["units"] = LENGTH_UNIT
         for name in ("materials", "boundaries"):
             group.create_dataset(name, data=list(getattr(self, name)), dtype=h5py.string_dtype())
@@ -149,7 +164,9 @@ class MeshArrays:
                      materials=tuple(group["materials"].asstr()[()]),
                      facets=group["facets"][()], facet_index=group["facet_index"][()],
                      boundaries=tuple(group["boundaries"].asstr()[()]),
-                     facet_domains=group["facet_domains"][()])
+                     facet_domains=group["facet_domains"][()],
+                     geometry_numbers=(group["geometry_numbers"][()] if "geometry_numbers" in group
+                                       else np.zeros(0, dtype=np.int32)))
         arrays.check()
         return arrays
 
@@ -171,6 +188,8 @@ class MeshArrays:
               or (len(self.facet_index) and (self.facet_index.min() < 1
                                              or self.facet_index.max() > len(self.boundaries)))):
             problems.append("region numbers lack names")
+        elif len(self.geometry_numbers) not in (0, len(self.boundaries)):
+            problems.append("geometry numbers do not match the boundaries")
         if problems:
             raise ResultsError(f"stored mesh is inconsistent: {problems[0]}")
 

@@ -7,6 +7,7 @@ that runs in a plane y = const, and its front.
 """
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +19,10 @@ def sample_vertex_field(mesh: ngs.Mesh, vertex_values: np.ndarray, points: np.nd
     gf = ngs.GridFunction(ngs.H1(mesh, order=1))
     gf.vec.FV().NumPy()[:] = np.asarray(vertex_values, dtype=float)
     located = mesh(*np.asarray(points, dtype=float).T)
-    values = np.asarray(gf(located), dtype=float).reshape(len(points))
-    values[located["nr"] < 0] = np.nan
+    inside = located["nr"] >= 0  # NGSolve raises on a point outside (a domain that is no box)
+    values = np.full(len(points), np.nan)
+    if inside.any():
+        values[inside] = np.asarray(gf(located[inside]), dtype=float).reshape(-1)
     return values
 
 
@@ -53,7 +56,9 @@ def plot_phase_field_3d(mesh: ngs.Mesh, z_vertex_values: np.ndarray, png: str | 
                                        np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, middle)]))
     X, Y, Z = np.meshgrid(*inset, indexing="ij")
     cube = sample_vertex_field(mesh, z_vertex_values, np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]))
-    through = np.nanmax(cube.reshape(X.shape), axis=1)  # (x, z)
+    with warnings.catch_warnings():  # lines along y that miss a domain which is no box
+        warnings.simplefilter("ignore", RuntimeWarning)
+        through = np.nanmax(cube.reshape(X.shape), axis=1)  # (x, z)
 
     fig = new_figure(figsize=(11, 4.8), constrained_layout=True)
     left, right = fig.subplots(1, 2)

@@ -13,7 +13,10 @@ tetrahedral mesh of the solid (exact for planar faces, within the chord of a cur
 """
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import sys
 from pathlib import Path
 from typing import Any, ClassVar, Iterable, Mapping, Sequence
 
@@ -22,8 +25,8 @@ import ngsolve as ngs
 
 from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces, generate_mesh
 
-__all__ = ["OccDomain", "BoundaryConflict", "name_boundaries", "shape_from_specs", "read_shape",
-           "DEFAULT_BOUNDARY"]
+__all__ = ["OccDomain", "BoundaryConflict", "EmptyShape", "UnreadableFile", "name_boundaries",
+           "shape_from_specs", "read_shape", "DEFAULT_BOUNDARY"]
 
 DEFAULT_BOUNDARY = "free"
 """Name of the boundary edges (faces) that neither the shape nor a selector names."""
@@ -34,6 +37,14 @@ NORMAL_TOL = 1e-6
 
 class BoundaryConflict(ValueError):
     """A selector matches nothing, or two names claim the same edge (face): one line."""
+
+
+class EmptyShape(ValueError):
+    """The shapes or the file leave no face (2D) or solid (3D): nothing to mesh."""
+
+
+class UnreadableFile(ValueError):
+    """OCC cannot read a CAD file (not STEP, BREP or IGES, or damaged): one line."""
 
 
 def _pnt(p: Sequence[float]) -> Any:
@@ -186,6 +197,19 @@ class OccDomain:
         """
         return generate_mesh(self.netgen_geometry(cracks), maxh, "the OCC shape",
                              "change the cracks or the mesh size")
+
+    def curve(self, mesh: ngs.Mesh, order: int, cracks: Any = ()) -> None:
+        """Curve ``mesh`` (a mesh of this domain with these cracks) to ``order``.
+
+        A mesh rebuilt from a file (a checkpoint: :class:`ngfrac.io.hdf5.MeshArrays`) has no
+        geometry; it gets this domain's, with the cracks glued in as when it was meshed, so
+        that Netgen finds the curved edges (faces) by the numbers the file kept.
+        """
+        from netgen import occ
+
+        if not isinstance(mesh.ngmesh.GetGeometry(), occ.OCCGeometry):
+            mesh.ngmesh.SetGeometry(self.netgen_geometry(cracks))
+        mesh.Curve(order)
 
     # -- points ----------------------------------------------------------------------------------
 
@@ -362,7 +386,7 @@ def shape_from_specs(specs: Iterable[Any]) -> Any:
     """The shape of ``[[geometry.shapes]]``: the first entry, then each one added (fused),
     cut or intersected in order; faces (solids) that touch are merged (``UnifySameDomain``)."""
     shape = None
-    for spec in specs:
+    for i, spec in enumerate(specs):
         piece = _primitive(spec)
         if shape is None:
             shape = piece
@@ -372,20 +396,71 @@ def shape_from_specs(specs: Iterable[Any]) -> Any:
             shape = shape - piece
         else:
             shape = shape * piece
+        if not len(shape.solids if spec.type in SHAPES_3D else shape.faces):
+            what = "intersection with" if spec.op == "intersect" else spec.op
+            raise EmptyShape(f"shapes[{i}] ({what} {spec.type}) leaves nothing of the domain; "
+                             "make the holes and notches smaller or move them")
     if shape is None:
         raise ValueError("no shapes")
     return shape.UnifySameDomain()
 
 
+CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".brep": "BREP", ".iges": "IGES", ".igs": "IGES"}
+"""The file types :func:`read_shape` reads, by suffix (as Netgen's ``OCCGeometry`` does)."""
+
+
+@contextlib.contextmanager
+def _quiet_output():
+    """Silence what OCC's readers print on the C level (file descriptors 1 and 2): a
+    damaged file makes them write their own error lines, and ngfrac's is one line."""
+    for stream in (sys.stdout, sys.stderr):
+        stream.flush()
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        for fd, copy in zip((1, 2), saved):
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
 def read_shape(path: str | Path, scale: float = 1.0) -> Any:
     """The shape of a STEP, BREP or IGES file (names of edges and faces kept), times
-    ``scale`` about the origin. A file without solids is a 2D domain (faces in z = 0)."""
+    ``scale`` about the origin. A file without solids is a 2D domain (faces in z = 0).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    UnreadableFile
+        Not one of the suffixes of :data:`CAD_SUFFIXES`, or OCC cannot read it.
+    EmptyShape
+        The file holds no face and no solid (only curves or points, or nothing).
+    """
     from netgen import occ
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no CAD file {str(path)!r}")
-    shape = occ.OCCGeometry(str(path)).shape
+    kind = CAD_SUFFIXES.get(path.suffix.lower())
+    if kind is None:
+        raise UnreadableFile(f"{path.name!r} is not a CAD file ngfrac reads; give a "
+                             f"{', '.join(sorted(CAD_SUFFIXES))} file")
+    try:
+        with _quiet_output():
+            shape = occ.OCCGeometry(str(path)).shape
+            empty = not len(shape.faces)
+    except Exception as err:  # OCC raises plain Exceptions for files it cannot parse
+        text = " ".join(str(err).split())
+        article = "an" if kind == "IGES" else "a"
+        raise UnreadableFile(f"OCC cannot read it as {article} {kind} file ({text}); export it again "
+                             "from the CAD program") from None
+    if empty:
+        raise EmptyShape(f"the {kind} file holds no face or solid (only curves or points, or "
+                         "nothing); export the part's faces (2D) or its solid (3D)")
     if scale != 1.0:
         shape = shape.Scale(occ.Pnt(0, 0, 0), scale)
     return shape
@@ -418,6 +493,19 @@ def _matches(domain: OccDomain, part: Any, selector: Any, tol: float,
     return not domain.contains(points[0] + step * sign * normals[0])
 
 
+def _check_selector_dimension(i: int, selector: Any, dim: int) -> None:
+    """A box, point or normal with as many coordinates as the shape has dimensions."""
+    for key in ("box", "point", "normal"):
+        value = getattr(selector, key)
+        if not value:
+            continue
+        n = len(value[0]) if key == "box" else len(value)
+        if n != dim:
+            text = [list(c) for c in value] if key == "box" else list(value)
+            raise BoundaryConflict(f"geometry.boundaries[{i}].{key} = {text} has {n} coordinates "
+                                   f"but the shape is {dim}D; give {dim}")
+
+
 def name_boundaries(shape: Any, selectors: Sequence[Any], default_name: str = DEFAULT_BOUNDARY,
                     ) -> OccDomain:
     """Name the boundary parts of ``shape`` by selectors and return its domain.
@@ -429,7 +517,8 @@ def name_boundaries(shape: Any, selectors: Sequence[Any], default_name: str = DE
     Raises
     ------
     BoundaryConflict
-        A selector matches nothing, or two selectors with different names match one part.
+        A selector matches nothing, has coordinates of another dimension than the shape's,
+        or two selectors with different names match one part.
     """
     dim = 3 if len(shape.solids) else 2
     parts = _sub_parts(shape, dim)
@@ -439,6 +528,7 @@ def name_boundaries(shape: Any, selectors: Sequence[Any], default_name: str = DE
     probe = OccDomain(shape, default_name="")  # for containment and the diameter only
     chosen: dict[Any, tuple[str, int]] = {}
     for i, selector in enumerate(selectors):
+        _check_selector_dimension(i, selector, dim)
         tol = selector.tol or 1e-6 * probe.diameter
         matched = [part for part in parts if _matches(probe, part, selector, tol, file_names)]
         if not matched:

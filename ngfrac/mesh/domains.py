@@ -383,16 +383,21 @@ def occ_domain_of(geometry: Geometry) -> Domain:
     Raises
     ------
     SceneError
-        A selector matches nothing, two names claim one part, or the file cannot be read.
+        A selector matches nothing, two names claim one part, the file is missing or cannot
+        be read, or the shapes (the file) leave no face or solid.
     """
     from ..scene import SceneError
-    from .cad import BoundaryConflict, name_boundaries, read_shape, shape_from_specs
+    from .cad import (BoundaryConflict, EmptyShape, UnreadableFile, name_boundaries, read_shape,
+                      shape_from_specs)
 
     try:
         shape = (read_shape(geometry.file, geometry.scale) if geometry.file
                  else shape_from_specs(geometry.shapes))
-    except FileNotFoundError as err:
+    except (FileNotFoundError, UnreadableFile) as err:
         raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None
+    except EmptyShape as err:
+        prefix = f"geometry.file = {geometry.file!r}: " if geometry.file else "geometry."
+        raise SceneError(f"{prefix}{err}") from None
     except Exception as err:  # OCC raises plain Exceptions for bad shapes or files
         what = f"file = {geometry.file!r}" if geometry.file else "shapes"
         text = " ".join(str(err).split())  # one line: OCC's messages span several

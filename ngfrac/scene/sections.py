@@ -961,14 +961,29 @@ class Scene:
                                      f"be finite for 0 <= t <= t_end")
 
     def _check_dimension(self) -> None:
-        """A 3D model needs a box, a box needs a 3D model."""
+        """A 3D model needs a box (a solid), a box (a solid) needs a 3D model."""
         kind, geometry = self.model.kind, self.geometry.kind
+        if geometry == "occ":
+            self._check_occ_dimension()
+            return
         if kind in MODELS_3D and self.geometry.dim != 3:
             raise SceneError(f"model.kind = {kind!r} is 3D but geometry.kind = {geometry!r} is 2D; "
                              "set geometry.kind = 'box' (with depth)")
         if kind not in MODELS_3D and self.geometry.dim == 3:
             raise SceneError(f"geometry.kind = {geometry!r} is 3D but model.kind = {kind!r} is 2D; "
                              f"set model.kind = {MODELS_3D[0]!r}")
+
+    def _check_occ_dimension(self) -> None:
+        """A CAD file or shapes of the other dimension than the model's."""
+        kind, dim = self.model.kind, self.geometry.dim
+        source = f"geometry.file = {self.geometry.file!r}" if self.geometry.file else "geometry.shapes"
+        models_2d = ", ".join(repr(k) for k in MODELS if k not in MODELS_3D)
+        if kind in MODELS_3D and dim != 3:
+            raise SceneError(f"{source} is 2D (faces, no solid) but model.kind = {kind!r} is 3D; "
+                             f"give a solid or a 2D model.kind ({models_2d})")
+        if kind not in MODELS_3D and dim == 3:
+            raise SceneError(f"{source} is 3D (a solid) but model.kind = {kind!r} is 2D; set "
+                             f"model.kind = {MODELS_3D[0]!r} or give a planar face in z = 0")
 
     def _check_constrained(self) -> None:
         """Quasi-static u (alpha1 = 0) needs every component of u prescribed on some boundary;

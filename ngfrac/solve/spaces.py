@@ -36,15 +36,15 @@ class MeshFields:
         """Spaces and zero fields on ``mesh`` for ``scene`` and its elastic ``model``.
 
         On an occ domain with a curved boundary and order >= 2 the mesh is curved
-        (``mesh.Curve(order)``) first.
+        (:meth:`ngfrac.mesh.cad.OccDomain.curve`, also a mesh read from a checkpoint) first.
 
         One quadrature in every form and energy (:func:`quadrature_order`): the u-step then
         minimizes exactly the energy that the diagnostics report.
         """
         disc = scene.discretization
         curved = disc.order >= 2 and scene.geometry.kind == "occ" and scene.geometry.domain().curved
-        if curved:
-            mesh.Curve(disc.order)  # curved boundaries (ngfrac.mesh.cad): isoparametric u
+        if curved:  # curved boundaries (ngfrac.mesh.cad): isoparametric u
+            scene.geometry.domain().curve(mesh, disc.order, [c.points for c in scene.cracks])
         fes_u = model.space(mesh, disc.order, scene.loads)
         fes_z = ngs.H1(mesh, order=disc.z_order)
         exact = scene.material.gamma.is_constant and scene.material.split == "none" and not curved

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 from pathlib import Path
+from typing import Any, Callable
 
 from ngfrac.io.output import to_toml
 from ngfrac.scene import apply_overrides
@@ -69,10 +70,118 @@ BAD_EXPRESSIONS = {
 }
 
 
+# -- CAD domains (geometry.kind = "occ"): the plate_hole demo with one thing wrong ---------------
+
+def _plate(folder: Path) -> dict[str, Any]:
+    return copy.deepcopy(demo_data("plate_hole"))
+
+
+def _with_geometry(**geometry: Any) -> Callable[[Path], dict[str, Any]]:
+    def make(folder: Path) -> dict[str, Any]:
+        data = _plate(folder)
+        data["geometry"].update(geometry)
+        return data
+    return make
+
+
+def _from_file(name: str, text: str | None = None, shape: str = "", model: str = "",
+               **geometry: Any) -> Callable[[Path], dict[str, Any]]:
+    """The plate read from a file in ``folder``: ``text`` written as is, or a netgen.occ
+    ``shape`` ("face": the unit square, "box": the unit cube) written as STEP, or no file."""
+    def make(folder: Path) -> dict[str, Any]:
+        path = folder / name
+        if text is not None:
+            path.write_text(text)
+        elif shape:
+            from netgen import occ
+
+            part = (occ.WorkPlane().Rectangle(1, 1).Face() if shape == "face"
+                    else occ.Box(occ.Pnt(0, 0, 0), occ.Pnt(1, 1, 1)))
+            part.WriteStep(str(path))
+        data = _plate(folder)
+        data["geometry"] = {"kind": "occ", "file": str(path),
+                            "boundaries": data["geometry"]["boundaries"][:2], **geometry}
+        if model:
+            data["model"] = {"kind": model}
+            data["material"] = {"E": 1.0, "nu": 0.3, "gamma": 1.0}
+            data["loads"] = [{"boundary": "top", "value": ["0", "t", "0"]},
+                             {"boundary": "bottom", "value": ["0", "0", "0"]}]
+        return data
+    return make
+
+
+def _with(key: str, value: Any) -> Callable[[Path], dict[str, Any]]:
+    def make(folder: Path) -> dict[str, Any]:
+        data = _plate(folder)
+        data[key] = value
+        return data
+    return make
+
+
+_HOLE = {"type": "circle", "center": [0.5, 0.5], "radius": 0.1, "op": "cut"}
+_BOTTOM_AND_TOP = [{"name": "bottom", "normal": [0.0, -1.0]}, {"name": "top", "normal": [0.0, 1.0]}]
+_Y_NORMALS_3D = [{"name": "bottom", "normal": [0, -1, 0]}, {"name": "top", "normal": [0, 1, 0]}]
+
+BAD_CAD: dict[str, tuple[Callable[[Path], dict[str, Any]], str]] = {
+    # name: (scene data in a folder, fragment of the one-line message)
+    "cad file missing": (_from_file("missing.step"),
+                         r"geometry.file = '.*missing.step': no CAD file"),
+    "cad file unreadable": (_from_file("broken.step", text="not a STEP file\n"),
+                            r"geometry.file = '.*broken.step': OCC cannot read it as a STEP file"),
+    "cad file damaged brep": (_from_file("broken.brep", text="DBRep_DrawableShape\n"),
+                              r"geometry.file = '.*broken.brep': OCC cannot read it as a BREP file"),
+    "cad file of another type": (_from_file("part.stl", text="solid part\n"),
+                                 r"'part.stl' is not a CAD file ngfrac reads; give a .brep"),
+    "2d file for a 3d model": (_from_file("face.step", shape="face", model="elasticity_3d"),
+                               r"geometry.file = '.*face.step' is 2D \(faces, no solid\) but "
+                               r"model.kind = 'elasticity_3d' is 3D"),
+    "3d solid for a 2d model": (_from_file("box.step", shape="box", boundaries=_Y_NORMALS_3D),
+                                r"geometry.file = '.*box.step' is 3D \(a solid\) but "
+                                r"model.kind = 'plane_strain' is 2D"),
+    "2d selector on a 3d solid": (_from_file("box.step", shape="box", model="elasticity_3d"),
+                                  r"geometry.boundaries\[0\].normal = \[0.0, -1.0\] has 2 "
+                                  r"coordinates but the shape is 3D; give 3"),
+    "selector matches nothing": (_with_geometry(boundaries=[*_BOTTOM_AND_TOP,
+                                                            {"name": "hole", "point": [5.0, 5.0]}]),
+                                 r"geometry.boundaries\[2\] \(name = 'hole', point = \[5.0, 5.0\]\) "
+                                 r"matches no edge"),
+    "two names claim one edge": (_with_geometry(boundaries=[*_BOTTOM_AND_TOP,
+                                                            {"name": "base", "box": [[0, 0], [1, 0]]}]),
+                                 r"geometry.boundaries\[0\] \('bottom'\) and geometry.boundaries\[2\] "
+                                 r"\('base'\) claim the same edge"),
+    "crack outside the plate": (_with("cracks", [{"points": [[0.0, 0.2], [1.3, 0.2]]}]),
+                                r"cracks\[0\].points: point \[1.3, 0.2\] lies outside the domain"),
+    "crack ends in the hole": (_with("cracks", [{"points": [[0.0, 0.5], [0.5, 0.5]]}]),
+                               r"cracks\[0\].points: point \[0.5, 0.5\] lies outside the domain"),
+    "crack crosses the hole": (_with("cracks", [{"points": [[0.0, 0.5], [0.8, 0.5]]}]),
+                               r"cracks\[0\]: it leaves the domain near \(0.4.*\(a hole or notch"),
+    "load on a missing boundary": (_with("loads", [{"boundary": "bottom", "value": ["0", "0"]},
+                                                   {"boundary": "left", "value": ["t", "0"]}]),
+                                   r"loads\[1\].boundary = 'left' is not a boundary of the "
+                                   r"geometry; boundaries are bottom, .*hole"),
+    "holes empty the plate": (_with_geometry(shapes=[
+        {"type": "rectangle", "corner": [0.0, 0.0], "size": [1.0, 1.0]},
+        {**_HOLE, "center": [0.25, 0.5], "radius": 0.75}, {**_HOLE, "center": [0.75, 0.5], "radius": 0.75}]),
+        r"geometry.shapes\[2\] \(cut circle\) leaves nothing of the domain"),
+    "cut leaves nothing": (_with_geometry(shapes=[
+        {"type": "rectangle", "corner": [0.0, 0.0], "size": [1.0, 1.0]},
+        {"type": "rectangle", "corner": [-1.0, -1.0], "size": [3.0, 3.0], "op": "cut"}]),
+        r"geometry.shapes\[1\] \(cut rectangle\) leaves nothing of the domain"),
+    "3d cut leaves nothing": (_with_geometry(shapes=[
+        {"type": "box", "corner": [0.0, 0.0, 0.0], "size": [1.0, 1.0, 1.0]},
+        {"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 2.0, "op": "cut"}], boundaries=[]),
+        r"geometry.shapes\[1\] \(cut sphere\) leaves nothing of the domain"),
+}
+"""Bad CAD inputs (issue #12, item 5): each is one line, exit 2, in ``ngfrac check`` and ``run``."""
+
+
 def bad_scene_file(case: str, folder: Path) -> tuple[Path, str]:
     """A scene file (in ``folder``) with the bad input ``case`` of any table, and the regular
     expression its message must match."""
-    if case in BAD_EXPRESSIONS:
+    if case in BAD_CAD:
+        make, match = BAD_CAD[case]
+        data = make(folder)
+    elif case in BAD_EXPRESSIONS:
         override, match = BAD_EXPRESSIONS[case]
         data = apply_overrides(demo_data(), ["time.t_end=0.03", override])
     else:
@@ -85,4 +194,4 @@ def bad_scene_file(case: str, folder: Path) -> tuple[Path, str]:
     return path, match
 
 
-ALL_CASES = [*BAD_2D, *(f"3d {c}" for c in BAD_3D), *BAD_EXPRESSIONS]
+ALL_CASES = [*BAD_2D, *(f"3d {c}" for c in BAD_3D), *BAD_EXPRESSIONS, *BAD_CAD]

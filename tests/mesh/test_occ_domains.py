@@ -313,3 +313,41 @@ def test_3d_adaptive_run_on_a_box_with_a_cylindrical_hole(one_thread):
     assert change.nv_after <= 1500 and 0 <= z.min() and z.max() <= 1 + 1e-12
     assert CRACK_BOUNDARY in mesh.GetBoundaries()
     assert ngs.Integrate(1, mesh) == pytest.approx(scene.geometry.domain().measure, rel=1e-4)
+
+
+BOX_WITH_HOLE = [{"type": "box", "corner": [0, 0, 0], "size": [1, 1, 0.5]},
+                 {"type": "cylinder", "center": [0.6, 0.5, 0], "axis": [0, 0, 1], "radius": 0.15,
+                  "height": 0.5, "op": "cut"}]
+BOX_NAMES = [{"name": "top", "normal": [0, 1, 0]}, {"name": "bottom", "box": [[0, 0, 0], [1, 0, 0.5]]},
+             {"name": "hole", "point": [0.75, 0.5, 0.25]}]
+
+
+def measure_by_name(domain):
+    """Length (2D) or area (3D) of the boundary parts of each name, from OCC (exact)."""
+    parts = domain.shape.edges if domain.dim == 2 else domain.shape.faces
+    total = {}
+    for part in parts:
+        total[part.name] = total.get(part.name, 0.0) + part.mass
+    return total
+
+
+@pytest.mark.parametrize("shapes, selectors", [(PLATE, PLATE_NAMES), (BOX_WITH_HOLE, BOX_NAMES)],
+                         ids=["2d plate", "3d box with hole"])
+@pytest.mark.parametrize("suffix, writer", [(".step", "WriteStep"), (".brep", "WriteBrep")])
+def test_cad_file_round_trip_by_selectors(shapes, selectors, suffix, writer, tmp_path):
+    """A shape written to STEP (BREP) and read back as geometry.file, its boundaries named by
+    the same selectors, has the same measure and the same boundaries, each of the same size
+    (OCC's lengths and areas; 1e-9: the file's printed digits, measured 1e-15)."""
+    domain = Geometry(kind="occ", shapes=shapes, boundaries=selectors).domain()
+    path = tmp_path / f"part{suffix}"
+    getattr(domain.shape, writer)(str(path))
+    again = Geometry(kind="occ", file=str(path), boundaries=selectors).domain()
+    assert again.dim == domain.dim
+    assert again.measure == pytest.approx(domain.measure, rel=1e-9)
+    assert set(again.boundary_names) == set(domain.boundary_names) == {
+        *(s["name"] for s in selectors), "free"}
+    expected, found = measure_by_name(domain), measure_by_name(again)
+    assert found == pytest.approx(expected, rel=1e-9)
+    if suffix == ".step":  # STEP keeps the names: no selectors needed
+        named = Geometry(kind="occ", file=str(path)).domain()
+        assert measure_by_name(named) == pytest.approx(expected, rel=1e-9)
