@@ -186,14 +186,19 @@ def _exit_code(error: BaseException) -> int:
     return 2 if isinstance(error, (ValueError, OutputError, ParallelError)) else 1
 
 
-def _mpi_writers(folder: RunFolder | None, comm: Communicator,
+def _mpi_writers(folder: RunFolder | None, out_dir: Path, scene: Scene, comm: Communicator,
                  writers: Sequence[Writer]) -> list[Writer]:
-    """The writers of an MPI run: history.csv and the given ones, on rank 0."""
+    """The writers of an MPI run: history.csv and the given ones on rank 0, the VTK series
+    on every rank (a part per rank, listed by rank 0)."""
     if not comm.is_root:
-        return []
-    log.warning("under MPI this session writes history.csv only (no VTK, results.h5, "
+        vtk = VTKSnapshots(RunFolder(out_dir, None), scene)  # type: ignore[arg-type]
+        comm.barrier()  # rank 0 has made vtk/
+        return [vtk]
+    log.warning("under MPI ngfrac writes history.csv and vtk/ only (no results.h5, "
                 "checkpoints, crack path or plots yet; docs/parallel.md)")
-    return [HistoryCSV(folder), *writers]
+    vtk = VTKSnapshots(folder, scene)
+    comm.barrier()
+    return [HistoryCSV(folder), vtk, *writers]
 
 
 def _run(scene: Scene, out_dir: Path, overwrite: bool,
@@ -208,7 +213,7 @@ def _run(scene: Scene, out_dir: Path, overwrite: bool,
     if on_start is not None:
         on_start(stepper)
     if comm.distributed:
-        defaults, writers = _mpi_writers(folder, comm, writers), ()
+        defaults, writers = _mpi_writers(folder, out_dir, scene, comm, writers), ()
     else:
         defaults = default_writers(folder, scene, plots)
     record = stepper.record()

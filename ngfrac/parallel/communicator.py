@@ -220,6 +220,10 @@ class MPICommunicator:
         return "cg"
 
     # -- reductions -----------------------------------------------------------------------------
+    def barrier(self) -> None:
+        """Wait for every rank."""
+        self.comm.Barrier()
+
     def max(self, value: float) -> float:
         """The largest of the ranks' values (the same on every rank)."""
         return float(max(self.comm.allgather(value)))
@@ -279,7 +283,7 @@ class MPICommunicator:
                              f"{type(err).__name__}: {err}\n")
             sys.stderr.flush()
             self.comm.Abort(code)
-            raise  # not reached: Abort ends the process
+            os._exit(code)  # Abort may return before the launcher ends this process
 
 
 class _RootMirror:
