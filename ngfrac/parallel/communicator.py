@@ -182,6 +182,7 @@ class MPICommunicator:
         self._serial_ngmesh: Any = None
         self._nv = 0
         self._mirror: _RootMirror | None = None
+        self._warned_p1 = False
 
     # -- the scene and the mesh ---------------------------------------------------------------
     def check(self, scene: "Scene") -> None:
@@ -193,7 +194,8 @@ class MPICommunicator:
             raise ParallelError(f"material.split = {scene.material.split!r} under MPI is "
                                       "not supported yet; set material.split = 'none' (or run "
                                       "serially)")
-        if scene.discretization.order < 2 and self.is_root:
+        if scene.discretization.order < 2 and self.is_root and not self._warned_p1:
+            self._warned_p1 = True  # run_scene and the stepper both check
             log.warning("discretization.order = 1 under MPI: BDDC of P1 is one central direct "
                         "solve (no parallel speed-up); order >= 2 scales")
 

@@ -191,6 +191,7 @@ class DistributedSystem:
     def __init__(self, fes: ngs.FESpace, integrand: Any, preconditioner: str) -> None:
         self.form = ngs.BilinearForm(fes, symmetric=True)
         self.form += integrand
+        self.kind = preconditioner
         self.preconditioner = ngs.Preconditioner(self.form, preconditioner)
 
     def solve(self, rhs: ngs.BaseVector, z_old: ngs.BaseVector, out: ngs.BaseVector,
@@ -202,6 +203,6 @@ class DistributedSystem:
         cg = CGSolver(self.form.mat, self.preconditioner.mat, tol=1e-10, maxiter=CG_MAXITER)
         cg.Solve(rhs=rhs, sol=out, initialize=False)
         if cg.iterations >= CG_MAXITER:
-            raise SolverError(f"the z-solve (CG, preconditioner {self.preconditioner!s}) did "
+            raise SolverError(f"the z-solve (CG, preconditioner {self.kind!r}) did "
                               f"not converge at step {step}; run serially")
         return int(cg.iterations)
