@@ -78,7 +78,8 @@ def _launcher() -> list[str] | None:
         if "MPICH" in library and "HYDRA" in version.upper():
             return [candidate]
         if "Open MPI" in library and "Open MPI" in version:
-            return [candidate, "--oversubscribe"]
+            as_root = ["--allow-run-as-root"] if os.geteuid() == 0 else []  # else it refuses
+            return [candidate, "--oversubscribe", *as_root]
     return None
 
 
