@@ -4,6 +4,7 @@
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
 (:func:`ngfrac.scene.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
 them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
+Under ``mpirun -np N`` (N >= 3) the run is distributed (:mod:`ngfrac.parallel`); rank 0 prints.
 ``NGFRAC_THREADS`` caps the threads of a run (applied by :func:`ngfrac.runner.run_scene`).
 """
 from __future__ import annotations
@@ -19,6 +20,7 @@ from .scene.checks import ResolutionWarning, resolution_warnings
 from .mesh.domains import MeshingError
 from .io.output import OutputError
 from .io.hdf5 import ResultsError
+from .parallel.communicator import ParallelError, launched_rank
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
 
@@ -102,14 +104,15 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
-    print(f"ngfrac: error: {message}", file=sys.stderr)
+    if launched_rank() == 0:  # under mpirun every rank fails alike: one line
+        print(f"ngfrac: error: {message}", file=sys.stderr)
     return code
 
 
 def _warn_resolution(scene: Scene, strict: bool) -> None:
     """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2)."""
     found = resolution_warnings(scene)
-    for message in found:
+    for message in found if launched_rank() == 0 else ():
         print(f"ngfrac: warning: {message}", file=sys.stderr)
     if strict and found:
         raise _Strict(f"--strict: {len(found)} resolution warning(s) above; fix the scene or "
@@ -139,6 +142,8 @@ def _run(args: argparse.Namespace) -> int:
                             restart=bool(args.restart),
                             writers=[Progress(scene, disable=args.no_progress)])
     last = summary.last
+    if launched_rank() != 0:
+        return 0
     print(f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
           f"crack length {last.crack_length:.4f}, tip ({last.tip_x:.3f}, {last.tip_y:.3f}); "
           f"results in {summary.out_dir}")
@@ -162,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"model {scene.model.kind})")
             return 0
         return _run(args)
-    except (SceneError, OutputError, CheckpointError, ResultsError, _Strict) as err:
+    except (SceneError, OutputError, CheckpointError, ResultsError, ParallelError, _Strict) as err:
         return _fail(str(err))
     except (SolverError, MeshingError) as err:
         return _fail(str(err), EXIT_SOLVER)

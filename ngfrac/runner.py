@@ -30,8 +30,10 @@ from .environment import set_threads
 from .io.checkpoint import resume
 from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
                         to_toml, write_run_json)
-from .io.writers import (CHECKPOINT, PLOTS, RunFolder, VTKSnapshots, Writer, Writers,
-                         default_writers, run_info, write_crack_path, write_plots, write_snapshot)
+from .io.writers import (CHECKPOINT, PLOTS, HistoryCSV, RunFolder, VTKSnapshots, Writer,
+                         Writers, default_writers, run_info, write_crack_path, write_plots,
+                         write_snapshot)
+from .parallel.communicator import SERIAL, Communicator, ParallelError, world
 from .scene import Scene
 from .scene.checks import ResolutionWarning, resolution_warnings
 from .solve.stepper import PhaseFieldStepper, StepRecord
@@ -53,13 +55,21 @@ class RunSummary:
 
 
 def open_run(scene: Scene, out: Path, overwrite: bool = False,
-             restart: bool = False) -> tuple[PhaseFieldStepper, RunFolder]:
+             restart: bool = False,
+             comm: Communicator = SERIAL) -> tuple[PhaseFieldStepper, RunFolder | None]:
     """The stepper and the run folder of a new run (:meth:`RunFolder.create
     <ngfrac.io.writers.RunFolder.create>`) or of a restart from the folder's checkpoint
-    (its scene and the restart recorded by :func:`record_restart`)."""
+    (its scene and the restart recorded by :func:`record_restart`).
+
+    In an MPI job (``comm``) only rank 0 has the folder (None on the others) and a restart
+    is refused (:class:`~ngfrac.parallel.ParallelError`).
+    """
+    if comm.distributed and restart:
+        raise ParallelError("restart under MPI is not supported yet; continue the run serially "
+                            "(ngfrac run --restart DIR without mpirun)")
     if not restart:
-        folder = RunFolder.create(out, scene, overwrite)
-        return PhaseFieldStepper(scene), folder
+        folder = RunFolder.create(out, scene, overwrite) if comm.is_root else None
+        return PhaseFieldStepper(scene, comm=comm), folder
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists():
         raise OutputError(f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
@@ -123,7 +133,8 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
               on_step: Callable[[PhaseFieldStepper], None] | None = None,
               restart: bool = False,
               on_start: Callable[[PhaseFieldStepper], None] | None = None,
-              writers: Sequence[Writer] = ()) -> RunSummary:
+              writers: Sequence[Writer] = (),
+              comm: Communicator | None = None) -> RunSummary:
     """Run ``scene`` to its end time, writing history, VTK, results, checkpoints and plots.
 
     The files are written by :func:`~ngfrac.io.writers.default_writers`; ``NGFRAC_THREADS``,
@@ -141,7 +152,11 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     restart : continue the run in ``out_dir`` from its checkpoint
     on_start : called once with the stepper before the first step
     writers : more writers (:class:`~ngfrac.io.writers.Writer`), called after the default ones,
-        e.g. :class:`~ngfrac.io.writers.Progress`
+        e.g. :class:`~ngfrac.io.writers.Progress` (in an MPI job on rank 0 only)
+    comm : the processes of the run (:mod:`ngfrac.parallel`); by default
+        :func:`ngfrac.parallel.world`: an MPI job when launched by ``mpirun -np N`` (N >= 3;
+        rank 0 writes ``history.csv``, docs/parallel.md says what else), else one process.
+        In an MPI job an error on any rank ends the job (one line on stderr, ``Abort``).
 
     Warns
     -----
@@ -152,12 +167,55 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     for message in resolution_warnings(scene):
         warnings.warn(message, ResolutionWarning, stacklevel=2)
     set_threads()
+    comm = world() if comm is None else comm
+    comm.check(scene)  # the same on every rank: refused before anything is written
+    with comm.guard(_exit_code):
+        return _run(scene, Path(out_dir), overwrite, on_record, plots, on_step, restart,
+                    on_start, writers, comm)
+
+
+def _exit_code(error: BaseException) -> int:
+    """The exit status of ``ngfrac run`` for an error (an MPI job ends with it)."""
+    from .mesh.domains import MeshingError
+    from .solve.u_problem import SolverError
+
+    if isinstance(error, (SolverError, MeshingError)):
+        return 3
+    if isinstance(error, KeyboardInterrupt):
+        return 130
+    return 2 if isinstance(error, (ValueError, OutputError, ParallelError)) else 1
+
+
+def _mpi_writers(folder: RunFolder | None, out_dir: Path, scene: Scene, comm: Communicator,
+                 writers: Sequence[Writer]) -> list[Writer]:
+    """The writers of an MPI run: history.csv and the given ones on rank 0, the VTK series
+    on every rank (a part per rank, listed by rank 0)."""
+    if not comm.is_root:
+        vtk = VTKSnapshots(RunFolder(out_dir, None), scene)  # type: ignore[arg-type]
+        comm.barrier()  # rank 0 has made vtk/
+        return [vtk]
+    log.warning("under MPI ngfrac writes history.csv and vtk/ only (no results.h5, "
+                "checkpoints, crack path or plots yet; docs/parallel.md)")
+    vtk = VTKSnapshots(folder, scene)
+    comm.barrier()
+    return [HistoryCSV(folder), vtk, *writers]
+
+
+def _run(scene: Scene, out_dir: Path, overwrite: bool,
+         on_record: Callable[[StepRecord], None] | None, plots: bool,
+         on_step: Callable[[PhaseFieldStepper], None] | None, restart: bool,
+         on_start: Callable[[PhaseFieldStepper], None] | None, writers: Sequence[Writer],
+         comm: Communicator) -> RunSummary:
+    """:func:`run_scene` after its checks."""
     started = time.perf_counter()
-    stepper, folder = open_run(scene, Path(out_dir), overwrite, restart)
+    stepper, folder = open_run(scene, out_dir, overwrite, restart, comm)
     stepper.timer.add("set-up (mesh, spaces, z0, u0)", time.perf_counter() - started)
     if on_start is not None:
         on_start(stepper)
-    defaults = default_writers(folder, scene, plots)
+    if comm.distributed:
+        defaults, writers = _mpi_writers(folder, out_dir, scene, comm, writers), ()
+    else:
+        defaults = default_writers(folder, scene, plots)
     record = stepper.record()
     if on_step is not None:
         on_step(stepper)
@@ -172,5 +230,6 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
         all_writers.finish(stepper)
     log.info("run %s finished at t=%g in %.1f s", scene.name, record.t, record.wall_s)
     wall = time.perf_counter() - started
-    snapshots = next(w.n_snapshots for w in defaults if isinstance(w, VTKSnapshots))
-    return RunSummary(folder.path, record, snapshots, stepper.timer.table(total=wall))
+    snapshots = next((w.n_snapshots for w in defaults if isinstance(w, VTKSnapshots)), 0)
+    return RunSummary(out_dir if folder is None else folder.path, record, snapshots,
+                      stepper.timer.table(total=wall))

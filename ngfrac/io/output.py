@@ -296,16 +296,20 @@ class VTKSeries:
         self.stem = stem
         self.manifest = manifest
         self.entries: list[tuple[float, str]] = []
+        self._count = 0
+        """Snapshots written (entries has one per part of a distributed mesh)."""
         self._warned = False
         with self._writing(""):
             folder.mkdir(parents=True, exist_ok=True)
 
-    def _writing(self, name: str) -> contextlib.AbstractContextManager[None]:
-        """The manifest's :meth:`Manifest.writing` for a file of the series ("": the folder)."""
+    def _writing(self, *names: str) -> contextlib.AbstractContextManager[None]:
+        """The manifest's :meth:`Manifest.writing` for files of the series ("": the folder)."""
         if self.manifest is None:
             return contextlib.nullcontext()
-        relative = (self.folder / name).relative_to(self.manifest.folder).as_posix()
-        return self.manifest.writing(relative + "/" if not name else relative)
+        relative = [(self.folder / name).relative_to(self.manifest.folder).as_posix()
+                    for name in names]
+        return self.manifest.writing(*(path + "/" if not name else path
+                                       for name, path in zip(names, relative)))
 
     def resume(self, t: float) -> None:
         """Keep the snapshots of an earlier run up to time ``t`` (for a restart)."""
@@ -317,6 +321,7 @@ class VTKSeries:
         pattern = re.compile(r'timestep="([^"]+)"[^>]*file="([^"]+)"')
         entries = [(float(m.group(1)), m.group(2)) for m in pattern.finditer(collection.read_text())]
         self.entries = [(time_, file) for time_, file in entries if time_ <= t * (1 + 1e-12) + 1e-300]
+        self._count = len(self.entries)
         self._write_collection()
 
     def estimate_bytes(self, mesh: ngs.Mesh, n_components: int) -> int:
@@ -346,21 +351,48 @@ class VTKSeries:
                           f"{self.subdivision} will take about {size / 1e6:.0f} MB per file; "
                           "lower output.vtk_subdivision (each step down divides it by ~4 in 2D, "
                           "~8 in 3D) or raise output.vtk_every", stacklevel=2)
-        name = f"{self.stem}_{len(self.entries):05d}"
+        name = f"{self.stem}_{self._count:05d}"
         output = ngs.VTKOutput(ma=mesh, coefs=list(fields.values()), names=list(fields),
                                filename=str(self.folder / name), subdivision=self.subdivision)
+        if mesh.comm.size > 1:
+            return self._write_parts(mesh.comm, output, name, t)
         with self._writing(name + ".vtu"):
             output.Do()
         self.entries.append((t, name + ".vtu"))
+        self._count += 1
         self._write_collection()
         return self.folder / (name + ".vtu")
+
+    @property
+    def n_snapshots(self) -> int:
+        """Snapshots in the series (of a distributed mesh, each has one entry per part)."""
+        return self._count
+
+    def _write_parts(self, comm: Any, output: Any, name: str, t: float) -> Path:
+        """A snapshot of a distributed mesh: NGSolve writes ``NAME_procR.vtu`` on each rank
+        R >= 1 (rank 0 holds no elements) and ``NAME.pvd`` of them on rank 0; the series
+        lists every part at time t (``part="R"``). Only rank 0 lists files and writes the
+        collection (the other ranks have no manifest)."""
+        parts = [f"{name}_proc{rank}.vtu" for rank in range(1, comm.size)]
+        writing = self._writing(name + ".pvd", *parts) if comm.rank == 0 else contextlib.nullcontext()
+        with writing:
+            comm.Barrier()  # rank 0 has listed the parts (and checked that none is a user's)
+            output.Do()
+            comm.Barrier()  # every part on disk before the manifest checks what exists
+        self.entries += [(t, part) for part in parts]
+        self._count += 1
+        if comm.rank == 0:
+            self._write_collection()
+        return self.folder / (name + ".pvd")
 
     def _write_collection(self) -> None:
         lines = ['<?xml version="1.0"?>',
                  '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
                  "  <Collection>"]
         for t, file in self.entries:
-            lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(file)}/>')
+            part = file.rsplit("_proc", 1)[1][:-len(".vtu")] if "_proc" in file else "0"
+            lines.append(f'    <DataSet timestep="{t!r}" group="" part="{part}" '
+                         f'file={quoteattr(file)}/>')
         lines += ["  </Collection>", "</VTKFile>", ""]
         with self._writing(f"{self.stem}.pvd"):
             atomic_write_text(self.folder / f"{self.stem}.pvd", "\n".join(lines))

@@ -271,7 +271,7 @@ class VTKSnapshots(Writer):
     @property
     def n_snapshots(self) -> int:
         """The snapshots in the series (a restart's kept ones included)."""
-        return len(self.series.entries)
+        return self.series.n_snapshots
 
 
 class Checkpoints(Writer):

@@ -13,7 +13,8 @@ All of them are what the stepper itself uses, with the degradation g(z) = (1-z)^
   nu (sigma_xx + sigma_yy), exact without a split, plane stress sigma_zz = 0); with the 3D
   spectral split all three come from the stress projected per element (:func:`projected`);
 - ``estimator``: the scene's indicator on z (``adaptivity.estimator``) per element, and ``h``:
-  the longest edge per element, both piecewise constant (L2 of order 0).
+  the longest edge per element, both piecewise constant (L2 of order 0); not on a
+  distributed mesh (an MPI run) yet.
 """
 from __future__ import annotations
 
@@ -184,6 +185,8 @@ def snapshot_fields(stepper: "PhaseFieldStepper") -> dict[str, Any]:
         fields["stress"] = stress_components(stress, mesh.dim)
         fields["von_mises"] = von_mises(stress, model)
         fields["principal_stress"] = principal_stresses(stress, mesh.dim)
+    if mesh.comm.size > 1:  # per-element fields of a distributed mesh: not yet
+        return fields
     fields["estimator"] = piecewise_constant(mesh, z_indicators(stepper.scene, z), "estimator")
     fields["h"] = piecewise_constant(mesh, element_diameters(mesh), "h")
     return fields

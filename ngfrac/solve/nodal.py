@@ -30,7 +30,7 @@ class LagrangeNodes:
         self.order = order
         vertices = np.array(mesh.ngmesh.Coordinates())[:, : mesh.dim]
         nv = mesh.nv
-        if order == 1:
+        if order == 1 or mesh.ne == 0:  # no elements: rank 0 of a distributed mesh
             self.edge_vertices = np.zeros((0, 2), dtype=int)
             self.points = vertices
             self.beta = 1.0
@@ -46,7 +46,10 @@ class LagrangeNodes:
             self.points = np.vstack([vertices, 0.5 * (vertices[pairs[:, 0]] + vertices[pairs[:, 1]])])
             if mesh.GetCurveOrder() > 1:
                 self._curved_midpoints(mesh, vertices)
-            self.beta = self._midpoint_bubble_value(fes, vertices, pairs)
+            if mesh.comm.size > 1:  # point evaluation is not local on a distributed mesh
+                self.beta = _reference_beta(mesh.dim)
+            else:
+                self.beta = self._midpoint_bubble_value(fes, vertices, pairs)
         self.nv = nv
 
     def _curved_midpoints(self, mesh: ngs.Mesh, vertices: np.ndarray) -> None:
@@ -155,3 +158,16 @@ class LagrangeNodes:
                 break
             coefficient[high] = np.nextafter(coefficient[high], -raise_value)
         return coefficient
+
+
+def _reference_beta(dim: int) -> float:
+    """The midpoint value of the edge bubble, measured on a serial mesh of dimension ``dim``."""
+    if dim == 2:
+        from netgen.geom2d import unit_square as geometry
+    else:
+        from netgen.csg import unit_cube as geometry
+    mesh = ngs.Mesh(geometry.GenerateMesh(maxh=1.0))
+    fes = ngs.H1(mesh, order=2)
+    vertices = np.array(mesh.ngmesh.Coordinates())[:, :dim]
+    pairs = np.array([(e.vertices[0].nr, e.vertices[1].nr) for e in mesh.edges], dtype=int)
+    return LagrangeNodes._midpoint_bubble_value(fes, vertices, pairs)

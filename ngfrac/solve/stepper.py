@@ -25,6 +25,7 @@ import ngsolve as ngs
 
 from ..mesh.adapter import Adaptation, MeshAdapter
 from ..mesh.domains import Domain, domain_of
+from ..parallel.communicator import SERIAL, Communicator, ParallelError
 from ..physics.crack_models import crack_model
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.elastic import make_model
@@ -58,6 +59,10 @@ class PhaseFieldStepper:
         A mesh to use instead of the uniform mesh the scene describes (no initial adaptation).
     state : StepperState, optional
         Continue from this state (:meth:`state`, a checkpoint) instead of the initial one.
+    comm : Communicator, optional
+        The processes of the run (:mod:`ngfrac.parallel`): one (the default) or an MPI job
+        (:class:`~ngfrac.parallel.MPICommunicator`; the mesh is made on rank 0 and
+        distributed, so neither ``mesh`` nor ``state`` can be given).
 
     Examples
     --------
@@ -67,8 +72,14 @@ class PhaseFieldStepper:
     """
 
     def __init__(self, scene: Scene, mesh: ngs.Mesh | None = None,
-                 state: StepperState | None = None) -> None:
+                 state: StepperState | None = None, comm: Communicator | None = None) -> None:
         self._scene = scene
+        self.comm: Communicator = SERIAL if comm is None else comm
+        """The processes of the run (:mod:`ngfrac.parallel`)."""
+        self.comm.check(scene)
+        if self.comm.distributed and (mesh is not None or state is not None):
+            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene; a given "
+                                "mesh or state (restart) is not supported yet")
         self.model = make_model(scene)
         self.crack_model = crack_model(scene.phase_field.model)
         """The phase-field functional (:mod:`ngfrac.physics.crack_models`)."""
@@ -77,7 +88,8 @@ class PhaseFieldStepper:
         """Time as a count of ``time.dt``: t = ticks * dt, exact for any number of steps."""
         self.control = StepSizeControl(scene.time)
         self.context = StepContext(ngs.Parameter(0.0), ngs.Parameter(1.0 / scene.time.dt),
-                                   ThreadPolicy(scene.discretization.threaded_solves), PhaseTimer())
+                                   ThreadPolicy(scene.discretization.threaded_solves), PhaseTimer(),
+                                   self.comm)
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
         self.domain: Domain = domain_of(scene.geometry)
         """The domain (:mod:`ngfrac.mesh.domains`)."""
@@ -94,7 +106,8 @@ class PhaseFieldStepper:
             self.load_state(state)
             return
         size = self.adapter.sizes.hmax if self.adapter else scene.mesh_size
-        self._initial_state(mesh if mesh is not None else self.domain.build_mesh(size, polylines))
+        self._initial_state(mesh if mesh is not None else
+                            self.comm.distribute(lambda: self.domain.build_mesh(size, polylines)))
         if self.adapter is not None and mesh is None:
             self.fields = self.adapter.resolve_initial(self.fields, lambda f: self.tip(),
                                                        self._initial_state, self.threads.solves)
@@ -184,7 +197,7 @@ class PhaseFieldStepper:
     def crack(self) -> CrackSet:
         """The crack set of the current z: tip, ridge, grown length, other damage zones
         (:func:`ngfrac.post.crackset.find_crack`)."""
-        return self.tracker.crack(self.fields)
+        return self.comm.crack(self.tracker, self.fields)
 
     def tip(self) -> np.ndarray:
         """The current crack tip: the end of the crack's ridge (:meth:`crack`)."""
@@ -281,7 +294,7 @@ class PhaseFieldStepper:
                 solve_s += time.perf_counter() - solve_started
                 with self.timer.phase("z: bounds at nodes"):
                     old, new = self.z_problem.project()
-                dz_max = float(np.max(new - old)) if len(new) else 0.0
+                dz_max = self.comm.max(float(np.max(new - old)) if len(new) else 0.0)
                 if not self.control.rejects(dz_max):
                     break
                 f.z.vec.data = saved_z  # z changed too much: redo the step smaller
@@ -297,8 +310,9 @@ class PhaseFieldStepper:
         """A record of the current state (diagnostics only when asked for); ``step`` holds
         the per-step columns (dz_max, z_iterations, dt, step_s, solve_s, adapt_s)."""
         f = self.fields
+        nv, ndof = self.comm.counts(f)
         base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self.timer.started,
-                    dim=f.mesh.dim, nv=f.mesh.nv, ndof=f.ndof, n_adapt=len(self.adaptations),
+                    dim=f.mesh.dim, nv=nv, ndof=ndof, n_adapt=len(self.adaptations),
                     eta_total=self.adapter.eta_total if self.adapter is not None else math.nan,
                     pressurized=self.scene.phase_field.pressurized, **step)
         if not diagnose:
@@ -315,10 +329,9 @@ class PhaseFieldStepper:
         volume = (crack_volume(f.u, f.z, f.integration_order) if base["pressurized"]
                   else math.nan)
         crack = self.crack()
-        tip, sizes = crack.tip, self.tracker.element_sizes(f)
+        tip, (hmin, hmax) = crack.tip, self.comm.size_range(self.tracker, f)
         path_length = self._initial_length + crack.grown_length if f.mesh.dim == 2 else math.nan
-        return StepRecord(**base, forces=dict(self.forces), hmin=float(sizes.min()),
-                          hmax=float(sizes.max()),
+        return StepRecord(**base, forces=dict(self.forces), hmin=hmin, hmax=hmax,
                           E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
                           crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
                           path_length=path_length, n_damage_zones=crack.n_damage_zones,

@@ -26,6 +26,8 @@ from typing import Any, Iterator
 
 import ngsolve as ngs
 
+from ..parallel.communicator import sum_over_ranks
+
 __all__ = ["ThreadPolicy", "integrate", "parallel", "serial"]
 
 
@@ -84,7 +86,9 @@ def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.V
     """``Integrate(cf, mesh)`` with a result that does not depend on the thread count.
 
     Each component is integrated element by element (threaded, bitwise reproducible) and the
-    element values are summed with :func:`math.fsum` (correctly rounded, order independent).
+    element values are summed with :func:`math.fsum` (correctly rounded, order independent);
+    on a distributed mesh the ranks' sums are summed the same way
+    (:func:`ngfrac.parallel.communicator.sum_over_ranks`).
 
     Parameters
     ----------
@@ -114,4 +118,5 @@ def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.V
         for component in components:
             per_element = ngs.Integrate(component, mesh, vb, **kwargs)
             values.append(math.fsum(per_element.NumPy()))
+    values = sum_over_ranks(mesh, values)  # a distributed mesh: each rank's elements
     return values[0] if cf.dim == 1 else values

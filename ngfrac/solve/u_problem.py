@@ -65,8 +65,9 @@ class DisplacementProblem:
         self.a_u = ngs.BilinearForm(fes, symmetric=True)
         with tangent_integrators(self.split):
             self.a_u += stiffness * dx
-        pre = register_preconditioner(self.a_u, disc.u_solver)  # before any assembly
-        self.linear = UOperator(self.a_u, fes.FreeDofs(), disc.u_solver, pre)
+        solver = context.comm.u_solver(disc.u_solver)  # MPI: CG with BDDC
+        pre = register_preconditioner(self.a_u, solver)  # before any assembly
+        self.linear = UOperator(self.a_u, fes.FreeDofs(), solver, pre)
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
                     if pf.alpha1 > 0 else None)
         self.body_force = model.body_force(scene.material, time)

@@ -77,6 +77,12 @@ class PhaseFieldProblem:
         self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inverse: Any = None
         self._obstacle = NodalObstacle(fields.nodes) if self.obstacle else None
+        self._distributed: DistributedSystem | None = None
+        if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
+            self._distributed = DistributedSystem(
+                fields.fes_z, (crack_model.stiffness(zt, w, gamma, eps)
+                               + pf.alpha2 * inv_dt * zt * w + drive * zt * w) * dx,
+                context.comm.z_preconditioner)
         self.shortened = 0
         """Projections the descent shortened (``discretization.z_update = "descent"``)."""
 
@@ -84,6 +90,12 @@ class PhaseFieldProblem:
         """The z-sub-step into :attr:`z_trial`; returns the CG iterations (0 for a direct
         solve; the active-set iterations with ``z_update = "obstacle"``). Raises
         :class:`SolverError`."""
+        if self._distributed is not None:
+            with self.context.timer.phase("z: assemble and solve"), self.context.threads.solves():
+                self.f_z.Assemble()
+                iterations = self._distributed.solve(self.f_z.vec, self.fields.z.vec,
+                                                     self.z_trial.vec, step)
+            return iterations
         with self.context.timer.phase("z: assemble"), parallel():
             self._assemble_matrix()
             self.f_z.Assemble()
@@ -166,7 +178,8 @@ class PhaseFieldProblem:
         z_old.data = self.fields.z.vec  # z still holds z_old here
         direction = ngs.GridFunction(self.fields.fes_z)
         self.fields.nodes.assign(direction, direction_nodes)
-        a_d = (self.a_z.mat * direction.vec).Evaluate()
+        matrix = self.a_z.mat if self._distributed is None else self._distributed.form.mat
+        a_d = (matrix * direction.vec).Evaluate()
         curvature = ngs.InnerProduct(direction.vec, a_d)
         slope = ngs.InnerProduct(z_old, a_d) - ngs.InnerProduct(self.f_z.vec, direction.vec)
         theta = 1.0 if curvature <= 0 else min(1.0, max(0.0, -slope / curvature))
@@ -174,3 +187,40 @@ class PhaseFieldProblem:
             self.shortened += 1
             self.context.timer.add("z: shortened projections", 0.0)
         return old + theta * direction_nodes
+
+
+class DistributedSystem:
+    """The z-system of a distributed mesh: K + (alpha2/dt) M + D(W) as one form, assembled
+    every step with its parallel preconditioner registered, solved by CG from z_old.
+
+    Distributed matrices have no ``AsVector`` (the serial path adds K and M to D's values),
+    no ``CreateSmoother`` and no direct solve in the pip wheel.
+
+    Parameters
+    ----------
+    fes : ngsolve.FESpace
+        The space of z.
+    integrand : ngsolve.comp.SumOfIntegrals
+        The whole bilinear form.
+    preconditioner : str
+        ``"local"`` (Jacobi) or ``"bddc"``.
+    """
+
+    def __init__(self, fes: ngs.FESpace, integrand: Any, preconditioner: str) -> None:
+        self.form = ngs.BilinearForm(fes, symmetric=True)
+        self.form += integrand
+        self.kind = preconditioner
+        self.preconditioner = ngs.Preconditioner(self.form, preconditioner)
+
+    def solve(self, rhs: ngs.BaseVector, z_old: ngs.BaseVector, out: ngs.BaseVector,
+              step: int | str) -> int:
+        """Assemble, then CG (relative tolerance 1e-10) from z_old into ``out``; returns the
+        iterations."""
+        self.form.Assemble()
+        out.data = z_old
+        cg = CGSolver(self.form.mat, self.preconditioner.mat, tol=1e-10, maxiter=CG_MAXITER)
+        cg.Solve(rhs=rhs, sol=out, initialize=False)
+        if cg.iterations >= CG_MAXITER:
+            raise SolverError(f"the z-solve (CG, preconditioner {self.kind!r}) did "
+                              f"not converge at step {step}; run serially")
+        return int(cg.iterations)

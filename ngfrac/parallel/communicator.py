@@ -1,0 +1,345 @@
+"""The communicator of a run: the seam between the serial code and an MPI job.
+
+The stepper and its sub-problems ask their communicator for what differs with several
+processes: the mesh (made on rank 0 and distributed), the u-solver (CG with BDDC on
+distributed matrices), sums and maxima over ranks, the crack set (found on rank 0 from z
+gathered onto the undistributed mesh), and what happens when one rank fails (the whole job
+ends). :class:`Serial` answers with the serial code path unchanged; :class:`MPICommunicator`
+is the MPI job (mpi4py is imported only when one is made).
+
+Facts this relies on (ngsolve 6.2.2608 from pip, mpi4py 4 with the ``mpich`` wheel; see
+docs/parallel.md): ``ngmesh.Distribute(comm)`` on rank 0 and ``Mesh.Receive(comm)`` on the
+others leave rank 0 without elements; GridFunction vectors are cumulated (every rank holds
+the value of each of its dofs), so pointwise operations act on local values; element-wise
+integrals are local; a direct ``Inverse`` of a distributed matrix raises on rank 0 and hangs
+the others, so u is solved by CG with BDDC and z by CG with a Jacobi (``"local"``) or BDDC
+preconditioner.
+"""
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import os
+import sys
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol
+
+import numpy as np
+import ngsolve as ngs
+
+if TYPE_CHECKING:
+    from ..post.crackset import CrackSet
+    from ..scene import Scene
+    from ..solve.crack_tracking import CrackTracker
+    from ..solve.spaces import MeshFields
+
+__all__ = ["SERIAL", "Communicator", "MPICommunicator", "ParallelError", "Serial",
+           "launched_rank", "launched_size", "world", "sum_over_ranks"]
+
+log = logging.getLogger(__name__)
+
+LAUNCHER_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE")
+"""Environment variables a launcher sets to the job's size (Open MPI; MPICH, Intel MPI, srun)."""
+Z_PRECONDITIONERS = ("local", "bddc")
+"""Preconditioners of the z-CG on distributed matrices: ``"local"`` is Jacobi."""
+
+
+class ParallelError(RuntimeError):
+    """A scene or a launch that cannot run distributed (yet); the message says what to do."""
+
+
+class Communicator(Protocol):
+    """What the stepper and its sub-problems ask of the processes of a run."""
+
+    size: int
+    rank: int
+    is_root: bool
+    distributed: bool
+
+    def check(self, scene: "Scene") -> None: ...
+    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
+    def u_solver(self, solver: str) -> str: ...
+    def max(self, value: float) -> float: ...
+    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet": ...
+    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]: ...
+    def counts(self, fields: "MeshFields") -> tuple[int, int]: ...
+    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager: ...
+
+
+class Serial:
+    """One process: every answer is the serial code path."""
+
+    size = 1
+    rank = 0
+    is_root = True
+    distributed = False
+
+    def check(self, scene: "Scene") -> None:
+        """Nothing to refuse: every scene runs on one process."""
+
+    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
+        """The mesh ``build()`` makes."""
+        return build()
+
+    def u_solver(self, solver: str) -> str:
+        """The scene's ``discretization.u_solver``."""
+        return solver
+
+    def max(self, value: float) -> float:
+        return value
+
+    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet":
+        """The tracker's crack set of the fields' z."""
+        return tracker.crack(fields)
+
+    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]:
+        """The smallest and the largest element diameter."""
+        sizes = tracker.element_sizes(fields)
+        return float(sizes.min()), float(sizes.max())
+
+    def counts(self, fields: "MeshFields") -> tuple[int, int]:
+        """Vertices of the mesh and unknowns of u and z."""
+        return fields.mesh.nv, fields.ndof
+
+    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager:
+        """Errors propagate as they are."""
+        return contextlib.nullcontext()
+
+
+SERIAL = Serial()
+"""The communicator of a run on one process."""
+
+
+def launched_size() -> int:
+    """The number of processes the MPI launcher started (1 outside ``mpirun``)."""
+    for name in LAUNCHER_SIZE_VARIABLES:
+        value = os.environ.get(name, "")
+        if value.isdigit():
+            return int(value)
+    return 1
+
+
+def launched_rank() -> int:
+    """This process's rank as the MPI launcher numbered it (0 outside ``mpirun``)."""
+    for name in ("OMPI_COMM_WORLD_RANK", "PMI_RANK"):
+        value = os.environ.get(name, "")
+        if value.isdigit():
+            return int(value)
+    return 0
+
+
+def world() -> "Communicator":
+    """The communicator of this process: MPI when launched by ``mpirun -np N`` with N > 1
+    (mpi4py is imported only then), else :data:`SERIAL`."""
+    if launched_size() <= 1:
+        return SERIAL
+    return MPICommunicator()
+
+
+def sum_over_ranks(mesh: ngs.Mesh, values: list[float]) -> list[float]:
+    """The sums over the ranks of ``mesh``'s communicator of per-rank ``values``; the same
+    on every rank (each rank's values gathered and summed with :func:`math.fsum` in rank
+    order). ``values`` unchanged on one process."""
+    comm = mesh.comm
+    if comm.size == 1:
+        return values
+    gathered = comm.mpi4py.allgather(values)
+    return [math.fsum(rank_values[i] for rank_values in gathered) for i in range(len(values))]
+
+
+class MPICommunicator:
+    """A run distributed over the processes of an MPI communicator.
+
+    Parameters
+    ----------
+    comm : mpi4py.MPI.Comm, optional
+        ``MPI.COMM_WORLD`` by default; needs 3 or more processes (Netgen's ``Distribute``
+        leaves rank 0 without elements).
+    z_preconditioner : str
+        Of the z-CG: ``"local"`` (Jacobi, the default) or ``"bddc"``.
+    """
+
+    distributed = True
+
+    def __init__(self, comm: Any = None, z_preconditioner: str = "local") -> None:
+        from mpi4py import MPI  # before NGSolve first meets a communicator (it loads its wrapper)
+
+        self.comm = MPI.COMM_WORLD if comm is None else comm
+        if z_preconditioner not in Z_PRECONDITIONERS:
+            raise ValueError(f"z_preconditioner = {z_preconditioner!r}: choose one of "
+                             f"{Z_PRECONDITIONERS}")
+        self.z_preconditioner = z_preconditioner
+        self.size, self.rank = self.comm.size, self.comm.rank
+        self.is_root = self.rank == 0
+        launched = launched_size()
+        if self.size == 1 and launched > 1:
+            raise ParallelError(f"the launcher started {launched} processes but MPI sees 1: "
+                               "mpirun belongs to another MPI than mpi4py's; use the mpiexec "
+                               "of the environment mpi4py was installed with")
+        if self.size < 3:
+            raise ParallelError(f"an MPI run needs 3 or more processes, got {self.size}: rank 0 "
+                               "holds no elements; run mpirun -np 3 (or more), or run serially")
+        self._serial_ngmesh: Any = None
+        self._nv = 0
+        self._mirror: _RootMirror | None = None
+        self._warned_p1 = False
+
+    # -- the scene and the mesh ---------------------------------------------------------------
+    def check(self, scene: "Scene") -> None:
+        """Refuse what does not run distributed yet (one line each)."""
+        if scene.adaptivity.enabled:
+            raise ParallelError("adaptivity under MPI is not supported yet; set "
+                                      "adaptivity.enabled = false (or run serially)")
+        if scene.material.split != "none":
+            raise ParallelError(f"material.split = {scene.material.split!r} under MPI is "
+                                      "not supported yet; set material.split = 'none' (or run "
+                                      "serially)")
+        from ..physics.crack_models import crack_model
+
+        update = scene.discretization.z_update
+        if (crack_model(scene.phase_field.model).z_update if update == "auto" else update) != "projection":
+            raise ParallelError(f"the z-update {update!r} (phase_field.model = "
+                                f"{scene.phase_field.model!r}) under MPI is not supported yet: "
+                                "only the paper's projection runs distributed (AT2 with "
+                                "discretization.z_update = 'projection'); run serially")
+        if scene.discretization.order < 2 and self.is_root and not self._warned_p1:
+            self._warned_p1 = True  # run_scene and the stepper both check
+            log.warning("discretization.order = 1 under MPI: BDDC of P1 is one central direct "
+                        "solve (no parallel speed-up); order >= 2 scales")
+
+    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
+        """``build()`` on rank 0 (it keeps the whole mesh for the crack set), distributed."""
+        import netgen.meshing
+
+        if self.is_root:
+            ngmesh = build().ngmesh
+            self._serial_ngmesh = ngmesh.Copy()
+            self._nv = len(ngmesh.Points())
+            local = ngmesh.Copy().Distribute(self.comm)
+        else:
+            local = netgen.meshing.Mesh.Receive(self.comm)
+        self._nv = self.comm.bcast(self._nv, root=0)
+        self._mirror = None
+        return ngs.Mesh(local)
+
+    def u_solver(self, solver: str) -> str:
+        """CG with BDDC: a sparse direct solve of a distributed matrix is not in the wheel."""
+        if solver != "cg" and self.is_root:
+            log.info("under MPI u is solved by CG with BDDC (discretization.u_solver = %r "
+                     "is for serial runs)", solver)
+        return "cg"
+
+    # -- reductions -----------------------------------------------------------------------------
+    def barrier(self) -> None:
+        """Wait for every rank."""
+        self.comm.Barrier()
+
+    def max(self, value: float) -> float:
+        """The largest of the ranks' values (the same on every rank)."""
+        return float(max(self.comm.allgather(value)))
+
+    def counts(self, fields: "MeshFields") -> tuple[int, int]:
+        """Vertices of the whole mesh and global unknowns of u and z."""
+        return self._nv, fields.fes_u.ndofglobal + fields.fes_z.ndofglobal
+
+    # -- the crack, on rank 0 -------------------------------------------------------------------
+    def _gathered(self, fields: "MeshFields") -> "_RootMirror | None":
+        """z at the nodes of every rank, put on rank 0's whole mesh (None elsewhere)."""
+        new_mesh = self._mirror is None or self._mirror.fields is not fields
+        values = fields.z_values()
+        payload = (fields.nodes.points, values) if new_mesh else values
+        gathered = self.comm.gather(payload, root=0)
+        if not self.is_root:
+            if new_mesh:
+                self._mirror = _RootMirror.remote(fields)
+            return None
+        if new_mesh:
+            self._mirror = _RootMirror(self._serial_ngmesh, fields, [p for p, _ in gathered])
+            gathered = [v for _, v in gathered]
+        self._mirror.set(gathered)
+        return self._mirror
+
+    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet":
+        """The crack set of the whole z, found on rank 0 and sent to every rank."""
+        mirror = self._gathered(fields)
+        payload = None
+        if self.is_root:
+            found = tracker.crack(mirror)
+            payload = (found, tracker.nucleus, tracker.previous_tip)
+        found, nucleus, previous = self.comm.bcast(payload, root=0)
+        tracker.nucleus, tracker.previous_tip = nucleus, previous
+        return found
+
+    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]:
+        """The smallest and largest element diameters of the whole mesh (rank 0's)."""
+        if self._mirror is None or self._mirror.fields is not fields:
+            self._gathered(fields)
+        sizes = None
+        if self.is_root:
+            diameters = tracker.element_sizes(self._mirror)
+            sizes = float(diameters.min()), float(diameters.max())
+        return self.comm.bcast(sizes, root=0)
+
+    # -- failures -------------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def guard(self, exit_code: Callable[[BaseException], int]) -> Iterator[None]:
+        """An error on one rank ends the whole job: one line on stderr, then ``Abort``
+        with ``exit_code(error)`` (the other ranks would wait for it forever)."""
+        try:
+            yield
+        except BaseException as err:  # noqa: BLE001 - any error, or the other ranks hang
+            code = exit_code(err)
+            sys.stderr.write(f"ngfrac: rank {self.rank} of {self.size}: "
+                             f"{type(err).__name__}: {err}\n")
+            sys.stderr.flush()
+            self.comm.Abort(code)
+            os._exit(code)  # Abort may return before the launcher ends this process
+
+
+class _RootMirror:
+    """On rank 0: the undistributed mesh with z's Lagrange nodes, and z gathered onto them.
+
+    The crack tracker works on it as on serial fields (``mesh``, ``nodes``, ``z_values()``).
+    Each rank's nodes are matched to the whole mesh's by their coordinates (nearest node;
+    Distribute copies the vertices bitwise, so the distance is 0).
+    """
+
+    def __init__(self, ngmesh: Any, fields: "MeshFields", points: list[np.ndarray]) -> None:
+        from scipy.spatial import cKDTree
+
+        from ..solve.nodal import LagrangeNodes
+
+        self.fields = fields
+        self.mesh = ngs.Mesh(ngmesh.Copy())
+        curve = fields.mesh.GetCurveOrder()
+        if curve > 1:
+            self.mesh.Curve(curve)
+        self.nodes = LagrangeNodes(ngs.H1(self.mesh, order=fields.fes_z.globalorder))
+        tree = cKDTree(self.nodes.points)
+        extent = float(np.ptp(self.nodes.points, axis=0).max())
+        self.index = []
+        for rank_points in points:
+            if len(rank_points) == 0:
+                self.index.append(np.zeros(0, dtype=int))
+                continue
+            distance, index = tree.query(rank_points)
+            if distance.max() > 1e-9 * extent:
+                raise RuntimeError(f"a node of a rank is {distance.max():.3g} from every node "
+                                   "of the whole mesh: the distributed mesh is not rank 0's")
+            self.index.append(index)
+        self._values = np.zeros(self.nodes.n_nodes)
+
+    @classmethod
+    def remote(cls, fields: "MeshFields") -> "_RootMirror":
+        """On the other ranks: only which fields were sent."""
+        mirror = cls.__new__(cls)
+        mirror.fields = fields
+        return mirror
+
+    def set(self, values: list[np.ndarray]) -> None:
+        """The ranks' node values (shared nodes hold the same cumulated value on each)."""
+        for index, rank_values in zip(self.index, values):
+            self._values[index] = rank_values
+
+    def z_values(self) -> np.ndarray:
+        return self._values.copy()
