@@ -150,17 +150,19 @@ def check_three_point_bending(history, stepper):
     eps = scene.phase_field.epsilon
     demo = load_demo("three_point_bending")
     deflection, force = -history["uy_load"], -history["Fy_load"]
-    # Linear before the peak: the beam is elastic until the damage at the notch tip localizes
-    # (AT2 softens it a little from the start: F/u falls by 0.46 % up to u = 0.018 mm in the
-    # quick run, by 0.7 % at 0.02 mm, then by 3 % a step as the band localizes).
-    early = (deflection > 0) & (deflection <= 0.018 + 1e-9)
+    # Linear at first: the beam is elastic until the damage at the notch tip localizes. F/u
+    # stays within 1 % of its first value while F < 0.35 P_c (quick run: 0.17 %; full run:
+    # 0.07 %); later AT2's band localizes at the notch tip and F/u falls by ~8 % before the
+    # crack grows (full run: between u = 0.012 and 0.025 mm, as SENT's 2 % dip).
+    p_c = demo.lefm_onset(scene)
+    early = (deflection > 0) & (force < 0.35 * p_c) & (np.arange(len(force)) < np.argmax(force))
     slope = force[early] / deflection[early]
-    assert np.all(np.abs(slope / slope[0] - 1) < 0.01), slope
+    assert early.sum() >= 5 and np.all(np.abs(slope / slope[0] - 1) < 0.01), slope
     # The peak is near the Griffith load of the sharp notch (Srawley's K_I for S/W = 4):
     # P_c = 0.0322 kN/mm with G_c, 0.0335 with the band's gamma (1 + h/(2 eps)) for its core
     # of h = 0.01 mm. As for SENT (tests/demos/test_demos.py), the phase field's peak lies
-    # within 15 % of that: quick run 0.0360 kN/mm (+7.5 % on 0.0335), 0.0284 at u = 0.06 mm.
-    p_c = demo.lefm_onset(scene)
+    # within 15 % of that: quick run 0.0360 kN/mm (+7.5 % on 0.0335), 0.0284 at u = 0.06 mm;
+    # full run 0.0337 kN/mm at u = 0.041 mm (+2.2 % on its 0.0330), 0.0060 at u = 0.06 mm.
     h_core = max(scene.adaptivity.hmin, eps / 10)
     p_eff = p_c * np.sqrt(1 + h_core / (2 * eps))
     peak = int(np.argmax(force))
@@ -169,7 +171,8 @@ def check_three_point_bending(history, stepper):
     # The crack starts at the notch tip (4, 0.4) and runs up the symmetry line x = 4 (the
     # supports differ only in ux, which the beam barely uses): every tip within the band's
     # half width epsilon of that line. Quick run: tip up to y = 0.86 mm, |x - 4| <= 0.033 mm
-    # (0.55 epsilon: the ridge's end wanders by about an element, h ~ 0.015, of the band).
+    # (0.55 epsilon: the ridge's end wanders by about an element, h ~ 0.015, of the band);
+    # full run: to y = 1.49 mm, |x - 4| <= 0.012 mm (0.4 epsilon).
     tip_x, tip_y = history["tip_x"], history["tip_y"]
     grown = np.isfinite(tip_y) & (tip_y > demo.NOTCH + eps)
     assert np.nanmax(tip_y) > demo.NOTCH + 3 * eps, f"the crack grew only to y = {np.nanmax(tip_y)}"
@@ -190,3 +193,15 @@ def test_specimen_quick(name, tmp_path, one_thread):
     history, stepper = run_demo(name, tmp_path / name, QUICK[name])
     assert stepper is not None and len(history["t"]) > 20
     CHECKS[name](history, stepper)
+
+
+@pytest.mark.slow
+def test_three_point_bending_full(tmp_path, one_thread):
+    # The full demo (epsilon = 0.03 mm, P2, adaptive under 8,000 vertices). The published
+    # number of this specimen is LEFM's: a sharp notch of a/W = 0.2 in a beam of S/W = 4 starts
+    # to grow at P_c = 0.0322 kN/mm (Srawley's K_I, 0.5 %). The tolerance is the SENT test's
+    # (15 % about the band's Griffith load): AT2 damages the ligament before the peak and the
+    # band's toughness is gamma (1 + h/(2 eps)). The crack runs up the symmetry line.
+    # Measured: peak 0.0337 kN/mm, 480 steps, 9.7 min wall (6.1 min CPU) on the shared machine.
+    history, stepper = run_demo("three_point_bending", tmp_path / "tpb", ["output.vtk_every=0"])
+    check_three_point_bending(history, stepper)
