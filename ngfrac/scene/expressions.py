@@ -20,9 +20,19 @@ CONSTANTS = {"pi": math.pi, "e": math.e}
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "atan", "atan2", "abs",
              "tanh", "sinh", "cosh", "min", "max")
 
+def _power(base: Any, exponent: Any) -> Any:
+    """``base ** exponent`` with a whole-number exponent passed as an int: NGSolve's power of
+    a CoefficientFunction by a float is exp(b log a), NaN for a negative base when
+    integrated (``Integrate((x - 4)**2.0, mesh)`` is nan, ``(x - 4)**2`` is right)."""
+    if isinstance(exponent, (float, np.floating)) and float(exponent).is_integer() \
+            and abs(exponent) <= 64:
+        exponent = int(exponent)
+    return base ** exponent
+
+
 _BINARY = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b,
            ast.Mult: lambda a, b: a * b, ast.Div: lambda a, b: a / b,
-           ast.Pow: lambda a, b: a ** b}
+           ast.Pow: _power}
 _UNARY = {ast.USub: lambda a: -a, ast.UAdd: lambda a: a}
 
 

@@ -41,3 +41,16 @@ def test_numpy_evaluation_gives_inf_and_nan_instead_of_raising(text, expected):
     raised ZeroDivisionError, 10.0**400 OverflowError)."""
     value = float(Expression(text).evaluate_numpy({}))
     assert np.isnan(value) if expected is None else value == expected
+
+
+def test_whole_powers_of_negative_values_integrate():
+    # NGSolve's CoefficientFunction ** 2.0 integrated NaN where the base is negative
+    # (a toughness "1 + (x - 4)**2" made the z-solve fail); whole exponents go as ints.
+    import ngsolve as ngs
+    from netgen.geom2d import unit_square
+
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
+    value = ngs.Integrate(Expression("(x - 4)**2").to_coefficient(), mesh)
+    assert abs(value - 37 / 3) < 1e-10  # int_0^1 (x - 4)^2 dx = (64 - 27)/3
+    half = ngs.Integrate(Expression("(x + 4)**0.5").to_coefficient(), mesh)
+    assert abs(half - 2 / 3 * (5 ** 1.5 - 8)) < 1e-9
