@@ -20,8 +20,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent
 VENV = ROOT / ".venv"
 STAMP = VENV / ".ngfrac-setup-stamp"
-EXTRAS = "test,docs"
-"""The extras installed into .venv: one environment serves every command."""
+EXTRAS = "test,docs,mpi"
+"""The extras installed into .venv: one environment serves every command (mpi: the
+MPI tests in tests/parallel run in CI too, not only where someone installed it)."""
 
 
 def venv_python() -> Path:
