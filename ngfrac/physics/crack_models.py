@@ -51,7 +51,6 @@ class CrackModel:
     name = ""
     c_w = math.nan
     z_update = "projection"
-    """What ``discretization.z_update = "auto"`` means for this model."""
 
     def degradation(self, z: Any, eta: float) -> Any:
         """``g(z) = (1 - z)^2 + eta``, the factor of the elastic energy (z a
