@@ -155,7 +155,8 @@ def _solve_inactive(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarray,
     held = np.flatnonzero(active)
     block = matrix[free][:, free].tocsc()
     right = rhs[free] - matrix[free][:, held] @ lower[held]
-    values[free] = spla.splu(block).solve(right)
+    values[free] = spla.splu(block, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                             options={"SymmetricMode": True}).solve(right)
     return values
 
 
