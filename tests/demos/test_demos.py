@@ -1,7 +1,4 @@
 """Every demo runs in a quick mode and shows one physical fact; z keeps its bounds."""
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,8 +7,7 @@ from ngfrac.post.branching import crack_topology_of
 from ngfrac.post.crackpath import history_path, kink_angle
 from ngfrac.io.plotting import read_history
 
-ROOT = Path(__file__).resolve().parents[2]
-DEMOS = ROOT / "demos"
+from .loading import DEMOS, ROOT, load_demo
 QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=50",
          "time.dt=1e-3", "adaptivity.max_vertices=2000"]
 QUICK_EXTRA = {
@@ -37,13 +33,6 @@ QUICK_EXTRA = {
 """Per-demo quick overrides, applied after QUICK."""
 
 
-def load_demo(name):
-    if str(DEMOS) not in sys.path:
-        sys.path.insert(0, str(DEMOS))  # the scripts import their shared _common.py
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 class BoundsChecker:

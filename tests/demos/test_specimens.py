@@ -4,9 +4,6 @@ demo runs and shows one physical fact; z keeps its bounds. ``--runslow`` runs th
 The quick runs are coarser (larger epsilon, P1 or a smaller vertex cap, fixed steps) than the
 demos; the numbers quoted in the comments were measured on those quick runs.
 """
-import importlib.util
-import sys
-from pathlib import Path
 
 import ngsolve as ngs
 import numpy as np
@@ -15,8 +12,7 @@ import pytest
 from ngfrac import load_scene
 from ngfrac.io.plotting import read_history
 
-ROOT = Path(__file__).resolve().parents[2]
-DEMOS = ROOT / "demos"
+from .loading import DEMOS, ROOT, load_demo
 
 SPECIMENS = ("l_panel", "three_point_bending")
 """The specimen demos this file runs (tests/demos/test_demos.py runs the others)."""
@@ -36,13 +32,6 @@ QUICK = {
 }
 
 
-def load_demo(name):
-    if str(DEMOS) not in sys.path:
-        sys.path.insert(0, str(DEMOS))  # the scripts import their shared _common.py
-    spec = importlib.util.spec_from_file_location(f"specimen_{name}", DEMOS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 class Bounds:

@@ -1,17 +1,14 @@
 """The 3D specimen from a STEP file (demos/notched_cylinder.py): the test writes the part with
 netgen.occ, the scene reads it as geometry.file, and a quick run checks the elastic
 stiffness of the notched bar and that the crack nucleates at the notch root."""
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from ngfrac.io.plotting import read_history
 
-DEMOS = Path(__file__).resolve().parents[2] / "demos"
+from .loading import DEMOS, load_demo
 
 # P2 on the first adaptive mesh (hmax = 0.25, ~330 vertices), fixed steps of 0.1: the crack
 # nucleates at t = 1.5. adaptivity.every = 1000: the adapter makes the first mesh under the
@@ -24,13 +21,6 @@ K_REFERENCE = 0.1768
 h = 0.4 P2: 0.1806, h = 0.2 P2: 0.1789, h = 0.2 P3: 0.1775, h = 0.1 P3: 0.17678)."""
 
 
-def load_demo(name):
-    if str(DEMOS) not in sys.path:
-        sys.path.insert(0, str(DEMOS))  # the scripts import their shared _common.py
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
