@@ -57,7 +57,8 @@ class PhaseFieldProblem:
         update = scene.discretization.z_update
         if update == "auto":
             update = crack_model.z_update
-        self.descent, self.obstacle = update == "descent", update == "obstacle"
+        self.update = update
+        """The z-update in use: "projection", "descent" or "obstacle"."""
         self.z_trial = ngs.GridFunction(fields.fes_z, "z_trial")
         zt, w = fields.fes_z.TnT()
         dx, eps = fields.dx, pf.epsilon
@@ -76,7 +77,7 @@ class PhaseFieldProblem:
             source = pressure if source is None else source + pressure
         self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
         self._inverse: Any = None
-        self._obstacle = NodalObstacle(fields.nodes) if self.obstacle else None
+        self._obstacle = NodalObstacle(fields.nodes) if update == "obstacle" else None
         self._distributed: DistributedSystem | None = None
         if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
             self._distributed = DistributedSystem(
@@ -99,7 +100,7 @@ class PhaseFieldProblem:
         with self.context.timer.phase("z: assemble"), parallel():
             self._assemble_matrix()
             self.f_z.Assemble()
-        if self.obstacle:
+        if self._obstacle is not None:
             with self.context.timer.phase("z: obstacle solve"), self.context.threads.solves():
                 iterations = self._solve_obstacle()
         else:
@@ -159,7 +160,7 @@ class PhaseFieldProblem:
         nodes = self.fields.nodes
         old = nodes.values(self.fields.z)
         new = np.minimum(1.0, np.maximum(self.trial_values(), old))
-        if self.descent:
+        if self.update == "descent":
             new = self._descent(old, new)
         nodes.assign(self.fields.z, new)
         return old, new
