@@ -58,7 +58,8 @@ class ObstacleSolution:
     iterations : int
         Active-set iterations (linear solves).
     converged : bool
-        False when the active set still changed after :data:`MAX_ITERATIONS`.
+        False when the active set still changed after :data:`MAX_ITERATIONS` or came back to
+        an earlier one (a cycle).
     """
 
     values: np.ndarray
@@ -121,7 +122,7 @@ def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarr
     values = np.array(lower, dtype=float)
     scale = float(np.max(np.abs(rhs))) if n else 0.0
     tol = 1e-12 * max(scale, np.finfo(float).tiny)
-    iterations, converged, seen = 0, False, set()
+    iterations, converged, seen, cycled = 0, False, set(), False
     while iterations < MAX_ITERATIONS:
         iterations += 1
         values = _solve_inactive(matrix, rhs, lower, active)
@@ -137,11 +138,13 @@ def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarr
             break
         seen.add(np.packbits(active).tobytes())
         if np.packbits(new_active).tobytes() in seen:  # a cycle: no set satisfies both tests
+            cycled = True
             break
         active = new_active
     if not converged:
-        LOG.warning("the z-step's active set did not settle in %d iterations; the last "
-                    "iterate is projected onto z >= z_old", MAX_ITERATIONS)
+        LOG.warning("the z-step's active set did not settle (%s after %d iterations); the "
+                    "last iterate is projected onto z >= z_old",
+                    "a cycle" if cycled else "still changing", iterations)
     return ObstacleSolution(np.maximum(values, lower), active, iterations, converged)
 
 
