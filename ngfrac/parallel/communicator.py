@@ -197,7 +197,7 @@ class MPICommunicator:
         from ..physics.crack_models import crack_model
 
         update = scene.discretization.z_update
-        if (crack_model(scene.phase_field.model).z_update if update == "auto" else update) != "projection":
+        if crack_model(scene.phase_field.model).resolve_z_update(update) != "projection":
             raise ParallelError(f"the z-update {update!r} (phase_field.model = "
                                 f"{scene.phase_field.model!r}) under MPI is not supported yet: "
                                 "only the paper's projection runs distributed (AT2 with "

@@ -52,6 +52,11 @@ class CrackModel:
     c_w = math.nan
     z_update = "projection"
 
+    def resolve_z_update(self, requested: str) -> str:
+        """The z-update a run uses for ``discretization.z_update = requested`` (``"auto"``:
+        this model's :attr:`z_update`)."""
+        return self.z_update if requested == "auto" else requested
+
     def degradation(self, z: Any, eta: float) -> Any:
         """``g(z) = (1 - z)^2 + eta``, the factor of the elastic energy (z a
         CoefficientFunction or a number)."""

@@ -740,9 +740,10 @@ class Discretization(_Section):
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
     an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
     (an active-set method); ``"auto"`` (the default) is the crack model's choice:
-    ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the default) runs factorizations and
-    solves outside NGSolve's TaskManager so that a run is bitwise reproducible with any
-    thread count (:mod:`ngfrac.solve.threads`); ``true`` threads them too.
+    ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the
+    default) runs factorizations and solves outside NGSolve's TaskManager so that a run is
+    bitwise reproducible with any thread count (:mod:`ngfrac.solve.threads`); ``true``
+    threads them too.
     """
 
     SECTION: ClassVar[str] = "discretization"

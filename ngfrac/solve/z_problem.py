@@ -54,9 +54,7 @@ class PhaseFieldProblem:
         inv_dt = context.inv_dt
         pf = scene.phase_field
         self.alpha2, self.solver = pf.alpha2, scene.discretization.z_solver
-        update = scene.discretization.z_update
-        if update == "auto":
-            update = crack_model.z_update
+        update = crack_model.resolve_z_update(scene.discretization.z_update)
         self.update = update
         """The z-update in use: "projection", "descent" or "obstacle"."""
         self.z_trial = ngs.GridFunction(fields.fes_z, "z_trial")
