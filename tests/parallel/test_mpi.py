@@ -135,14 +135,18 @@ def _field_scales(history: dict[str, list[float]], columns: list[str]) -> dict[s
 
 
 def _compare(scene: tuple[str, list[str]], tmp_path: Path, mpiexec: list[str],
-             field_scale: bool = False) -> tuple[dict, dict]:
+             field_scale: bool = False, script: str | None = None) -> tuple[dict, dict]:
     """Serial and MPI histories of ``scene``, every compared column within :data:`CG_RTOL`
-    (reactions and boundary means against the whole field's scale with ``field_scale``)."""
+    (reactions and boundary means against the whole field's scale with ``field_scale``).
+    The MPI run is ``ngfrac run``, or ``script`` (Python, writing into ``tmp_path / "mpi"``)."""
     serial = _ngfrac_run(*scene, tmp_path / "serial")
     assert serial.returncode == 0, serial.stderr
-    parallel = _ngfrac_run(*scene, tmp_path / "mpi", mpiexec)
+    if script is None:
+        parallel = _ngfrac_run(*scene, tmp_path / "mpi", mpiexec)
+        assert parallel.stdout.count(" steps to t = ") == 1, parallel.stdout  # rank 0 prints
+    else:
+        parallel = _run([*mpiexec, sys.executable, "-c", script])
     assert parallel.returncode == 0, parallel.stderr
-    assert parallel.stdout.count(" steps to t = ") == 1, parallel.stdout  # rank 0 prints
     a, b = _history(tmp_path / "serial" / "history.csv"), _history(tmp_path / "mpi" / "history.csv")
     loads = [name for name in a if name[0] in "Fu" and "_" in name]
     scales = _field_scales(a, loads) if field_scale else {}
@@ -163,10 +167,43 @@ def test_plane_strain_fixed_mesh_gives_the_serial_history(tmp_path, mpiexec):
             assert f'part="{rank}" file="{name}"' in collection
 
 
+MOVED_EXACTLY = r"""
+import numpy as np
+from ngfrac import load_scene
+from ngfrac.runner import run_scene
+
+changes = [0]
+
+
+def check(stepper):
+    # right after a mesh change: gathering the fields again gives rank 0 back, bit for bit,
+    # the transferred coefficients it sent (u, and z with its non-repair bound)
+    if len(stepper.adaptations) == changes[0]:
+        return
+    changes[0] = len(stepper.adaptations)
+    sent = stepper.adapter.serial_fields
+    sent = None if sent is None else [gf.vec.FV().NumPy().copy() for gf in (sent.u, sent.z)]
+    back = stepper.adapter.gather(stepper.fields)
+    if back is not None:
+        for name, values, gf in zip("uz", sent, (back.u, back.z)):
+            assert np.array_equal(values, gf.vec.FV().NumPy()), name + " changed in the move"
+        with open(MOVED, "a") as handle:
+            handle.write(f"{changes[0]}\n")
+
+
+run_scene(load_scene(SCENE, SETS), OUT, plots=False, on_step=check)
+"""
+
+
 def test_mode3_crack_grows_across_mesh_changes_as_in_the_serial_run(tmp_path, mpiexec):
-    serial, history = _compare(MODE3_ADAPTIVE, tmp_path, mpiexec)
+    scene, sets = MODE3_ADAPTIVE
+    moved = tmp_path / "moved.txt"
+    script = (f"SCENE, SETS = {str(ROOT / scene)!r}, {sets!r}\n"
+              f"OUT, MOVED = {str(tmp_path / 'mpi')!r}, {str(moved)!r}\n" + MOVED_EXACTLY)
+    serial, history = _compare(MODE3_ADAPTIVE, tmp_path, mpiexec, script=script)
     assert history["nv"] == serial["nv"] and history["n_adapt"] == serial["n_adapt"]
     assert history["n_adapt"][-1] >= 2 and len(set(history["nv"])) >= 3  # meshes changed
+    assert moved.read_text().split() == ["1", "2"]  # checked after each change
     assert history["tip_x"][0] == pytest.approx(0.3) and history["tip_x"][-1] > 0.45
     assert history["crack_length"][-1] > 1.2  # grown from 0.3 + the band
 
