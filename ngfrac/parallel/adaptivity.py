@@ -277,8 +277,9 @@ class DistributedMeshAdapter(MeshAdapter):
 
     @property
     def serial_fields(self) -> MeshFields | None:
-        """On rank 0 the serial copy as it is (after a mesh change: the transferred fields
-        that were sent to the ranks); None elsewhere."""
+        """On rank 0 the serial copy as it is: right after a mesh change the transferred u
+        and z that were sent to the ranks, after a gather the ranks' values (the remesh
+        test gathers z only); None elsewhere."""
         return self._root.fields if self.comm.is_root and self._root is not None else None
 
     def _scatter(self, fields: MeshFields) -> None:
