@@ -28,6 +28,7 @@ import numpy as np
 import ngsolve as ngs
 
 if TYPE_CHECKING:
+    from ..mesh.adapter import MeshAdapter
     from ..post.crackset import CrackSet
     from ..scene import Scene
     from ..solve.crack_tracking import CrackTracker
@@ -59,6 +60,7 @@ class Communicator(Protocol):
     def check(self, scene: "Scene") -> None: ...
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
     def u_solver(self, solver: str) -> str: ...
+    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter": ...
     def max(self, value: float) -> float: ...
     def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet": ...
     def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]: ...
@@ -84,6 +86,12 @@ class Serial:
     def u_solver(self, solver: str) -> str:
         """The scene's ``discretization.u_solver``."""
         return solver
+
+    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter":
+        """The adapter of an adaptive scene: :class:`~ngfrac.mesh.adapter.MeshAdapter`."""
+        from ..mesh.adapter import MeshAdapter
+
+        return MeshAdapter(scene)
 
     def max(self, value: float) -> float:
         return value
@@ -187,9 +195,10 @@ class MPICommunicator:
     # -- the scene and the mesh ---------------------------------------------------------------
     def check(self, scene: "Scene") -> None:
         """Refuse what does not run distributed yet (one line each)."""
-        if scene.adaptivity.enabled:
-            raise ParallelError("adaptivity under MPI is not supported yet; set "
-                                      "adaptivity.enabled = false (or run serially)")
+        if scene.adaptivity.enabled and scene.discretization.order > 2:
+            raise ParallelError(f"adaptivity under MPI moves P1/P2 fields only, got "
+                                f"discretization.order = {scene.discretization.order}; set "
+                                "order <= 2, adaptivity.enabled = false, or run serially")
         if scene.material.split != "none":
             raise ParallelError(f"material.split = {scene.material.split!r} under MPI is "
                                       "not supported yet; set material.split = 'none' (or run "
@@ -221,6 +230,19 @@ class MPICommunicator:
         self._nv = self.comm.bcast(self._nv, root=0)
         self._mirror = None
         return ngs.Mesh(local)
+
+    @property
+    def serial_ngmesh(self) -> Any:
+        """On rank 0 the undistributed Netgen mesh of the last :meth:`distribute` (None
+        elsewhere)."""
+        return self._serial_ngmesh
+
+    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter":
+        """A :class:`~ngfrac.parallel.adaptivity.DistributedMeshAdapter`: the serial
+        adapter on rank 0, on a copy of the fields gathered there."""
+        from .adaptivity import DistributedMeshAdapter
+
+        return DistributedMeshAdapter(scene, self)
 
     def u_solver(self, solver: str) -> str:
         """CG with BDDC: a sparse direct solve of a distributed matrix is not in the wheel."""

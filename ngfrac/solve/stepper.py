@@ -23,7 +23,7 @@ from typing import Any, Iterator
 import numpy as np
 import ngsolve as ngs
 
-from ..mesh.adapter import Adaptation, MeshAdapter
+from ..mesh.adapter import Adaptation
 from ..mesh.domains import Domain, domain_of
 from ..parallel.communicator import SERIAL, Communicator, ParallelError
 from ..physics.crack_models import crack_model
@@ -93,7 +93,7 @@ class PhaseFieldStepper:
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
         self.domain: Domain = domain_of(scene.geometry)
         """The domain (:mod:`ngfrac.mesh.domains`)."""
-        self.adapter = MeshAdapter(scene) if scene.adaptivity.enabled else None
+        self.adapter = self.comm.mesh_adapter(scene) if scene.adaptivity.enabled else None
         polylines = [crack.points for crack in scene.cracks]
         self.tracker = CrackTracker(
             polylines, initial_tip(polylines[0], self.domain.on_boundary) if polylines else None,
