@@ -12,10 +12,11 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 TIMING = {"wall_s", "step_s", "solve_s", "adapt_s"}
-# The quick slit (ngfrac/testing/scenes.py) with coarse steps: the crack runs through the plate in
-# 45 steps and the mesh changes several times.
+# The quick slit (ngfrac/testing/scenes.py) with coarse steps: in 35 steps the crack starts to
+# run (t ~ 0.09) and grows across several mesh changes (the last 10 steps of a run through the
+# plate, to t = 0.18 at a 2,500 cap, took 40 % of its time and checked nothing new).
 OVERRIDES = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "time.dt=4e-3",
-             "time.t_end=0.18", "adaptivity.max_vertices=2500", "output.vtk_every=0",
+             "time.t_end=0.14", "adaptivity.max_vertices=2000", "output.vtk_every=0",
              "output.results=false", "output.checkpoint_every=0"]
 
 
@@ -41,7 +42,7 @@ def histories(tmp_path_factory):
 def test_two_runs_with_two_threads_write_identical_histories(histories):
     first, second, _ = histories
     assert int(first[-1]["n_adapt"]) >= 2, "the scene should change its mesh"
-    assert float(first[-1]["tip_x"]) > 0.9, "the crack should run through the plate"
+    assert float(first[-1]["tip_x"]) > 0.5, "the crack should grow across the mesh changes"
     assert first == second
 
 
