@@ -481,15 +481,15 @@ def split_edges(shape: Any, points: Sequence[Sequence[float]]) -> Any:
     from netgen import occ
 
     if len(shape.solids):
-        raise BoundaryConflict("geometry.split_points splits edges of a 2D domain; the shape is 3D: "
-                               "remove split_points")
+        raise BoundaryConflict("geometry.split_points splits edges of a 2D domain; the shape "
+                               "is 3D: remove split_points")
     box = shape.bounding_box
     tol = 1e-6 * math.dist(tuple(box[0]), tuple(box[1]))
     edges = occ.Compound(list(shape.edges))
     for i, point in enumerate(points):
         if edges.Distance(occ.Vertex(_pnt(point))) > tol:
-            raise BoundaryConflict(f"geometry.split_points[{i}] = {list(point)} lies on no boundary "
-                                   "edge of the shape; give a point on the edge to split")
+            raise BoundaryConflict(f"geometry.split_points[{i}] = {list(point)} lies on no "
+                                   "boundary edge of the shape; give a point on the edge to split")
     return occ.Glue([shape, *(occ.Vertex(_pnt(point)) for point in points)])
 
 
