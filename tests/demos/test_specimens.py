@@ -334,3 +334,28 @@ def test_compact_tension_full(tmp_path, one_thread):
     # on the shared machine (load 4 to 9).
     history, stepper = run_demo("compact_tension", tmp_path / "ct", ["output.vtk_every=0"])
     check_compact_tension(history, stepper)
+
+
+@pytest.mark.slow
+def test_three_hole_beam_full(tmp_path, one_thread):
+    # The full demo (epsilon = 0.1 mm, P2, adaptive under 8,000 vertices). The published
+    # fact of this specimen is qualitative: which hole the crack from the notch runs into
+    # (Ambati et al. 2015: the middle one for their case). Criterion (three_hole_beam.
+    # hole_reached): the first hole whose edge a crack tip comes within 2 epsilon of.
+    # Measured: the crack leaves the notch at t = 0.133 mm, curves up and towards the load
+    # (tip (4.38, 1.94) at t = 0.16) and reaches the LOWER hole at t = 0.168 (tip (5.99,
+    # 2.50), on its edge); the force peaks at 0.527 kN/mm at t = 0.158. 3.8 min wall (162 s
+    # CPU) on the shared machine (load 2.5 to 9.7). The lower hole, not the published middle
+    # one: this model (AT2 without a split, epsilon 4x Ambati's, a toughened middle strip)
+    # is asserted as measured; docs/user-guide.md discusses the difference.
+    history, stepper = run_demo("three_hole_beam", tmp_path / "thb", ["output.vtk_every=0"])
+    demo = load_demo("three_hole_beam")
+    eps = stepper.scene.phase_field.epsilon
+    tips = demo.tip_track(history)
+    assert len(tips) and np.linalg.norm(tips[0] - demo.NOTCH_TIP) < 2 * eps, tips[:3]
+    hole, reached = demo.hole_reached(history, eps)
+    assert reached and hole == "lower", (hole, reached)
+    # On its way the crack stays between the notch and the holes' column (4 <= x <= 6).
+    before = tips[: np.flatnonzero(np.linalg.norm(tips - demo.HOLES[hole], axis=1)
+                                   < demo.RADIUS + 2 * eps)[0] + 1]
+    assert np.all((before[:, 0] > demo.NOTCH_TIP[0] - eps) & (before[:, 0] < 6.0 + eps)), before
