@@ -34,7 +34,7 @@ QUICK = {
                             "adaptivity.max_vertices=3000", "adaptivity.hmin=0.01",
                             "output.vtk_every=0"],
     # epsilon = 1 mm (the demo's 0.5), P1, fixed steps of 5e-3 mm, at most 2,000 vertices:
-    # 90 steps, ~11 s on one core. Peak near t = 0.33 mm, the crack then runs ~6 mm. (Steps of
+    # 90 steps, ~9 s on one core. Peak near t = 0.33 mm, the crack then runs ~6 mm. (Steps of
     # 0.01 mm overshoot the peak: 3.45 kN/mm against 3.14.)
     "compact_tension": ["phase_field.epsilon=1", "discretization.order=1", "time.dt=5e-3",
                         "time.adaptive=false", "time.t_end=0.45",
@@ -43,7 +43,7 @@ QUICK = {
     # A smaller check than the demo's (the crack reaches a hole only by t ~ 0.2 mm, after
     # more than a minute at P1): the demo's epsilon (0.1 mm: at 0.2 the holes' column fails
     # on its own before the notch grows), P1, fixed steps of 5e-3 mm to t = 0.18, at most
-    # 2,500 vertices: 36 steps, ~9 s on one core.
+    # 2,500 vertices: 36 steps, ~7 s on one core.
     "three_hole_beam": ["discretization.order=1", "time.dt=5e-3", "time.adaptive=false",
                         "time.t_end=0.18", "adaptivity.max_vertices=2500",
                         "output.vtk_every=0"],
