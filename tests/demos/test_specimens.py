@@ -331,7 +331,7 @@ def test_compact_tension_full(tmp_path, one_thread):
     # the Griffith load P_c = 2.694 kN/mm; the tolerance is the SENT test's (15 % about the
     # band's Griffith load, with this specimen's f of the contact arcs). The crack runs along
     # y = 0. Measured: peak 2.905 kN/mm at t = 0.292 mm, 182 steps, 5.4 min wall (95 s CPU)
-    # on the shared machine (load 4 to 9).
+    # on the shared machine (load 4 to 9); this test took 91 s at a load of ~2.
     history, stepper = run_demo("compact_tension", tmp_path / "ct", ["output.vtk_every=0"])
     check_compact_tension(history, stepper)
 
@@ -345,7 +345,8 @@ def test_three_hole_beam_full(tmp_path, one_thread):
     # Measured: the crack leaves the notch at t = 0.133 mm, curves up and towards the load
     # (tip (4.38, 1.94) at t = 0.16) and reaches the LOWER hole at t = 0.168 (tip (5.99,
     # 2.50), on its edge); the force peaks at 0.527 kN/mm at t = 0.158. 3.8 min wall (162 s
-    # CPU) on the shared machine (load 2.5 to 9.7). The lower hole, not the published middle
+    # CPU) on the shared machine (load 2.5 to 9.7); this test took 171 s at a load of ~2. The
+    # lower hole, not the published middle
     # one: this model (AT2 without a split, epsilon 4x Ambati's, a toughened middle strip)
     # is asserted as measured; docs/user-guide.md discusses the difference.
     history, stepper = run_demo("three_hole_beam", tmp_path / "thb", ["output.vtk_every=0"])
