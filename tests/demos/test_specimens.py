@@ -345,10 +345,10 @@ def test_three_hole_beam_full(tmp_path, one_thread):
     # Measured: the crack leaves the notch at t = 0.133 mm, curves up and towards the load
     # (tip (4.38, 1.94) at t = 0.16) and reaches the LOWER hole at t = 0.168 (tip (5.99,
     # 2.50), on its edge); the force peaks at 0.527 kN/mm at t = 0.158. 3.8 min wall (162 s
-    # CPU) on the shared machine (load 2.5 to 9.7); this test took 171 s at a load of ~2. The
-    # lower hole, not the published middle
-    # one: this model (AT2 without a split, epsilon 4x Ambati's, a toughened middle strip)
-    # is asserted as measured; docs/user-guide.md discusses the difference.
+    # CPU) on the shared machine (load 2.5 to 9.7); this test took 171 s at a load of ~2.
+    # The lower hole, not the published middle one: this model (AT2 without a split,
+    # epsilon 4x Ambati's, a toughened middle strip) is asserted as measured;
+    # docs/user-guide.md discusses the difference.
     history, stepper = run_demo("three_hole_beam", tmp_path / "thb", ["output.vtk_every=0"])
     demo = load_demo("three_hole_beam")
     eps = stepper.scene.phase_field.epsilon
