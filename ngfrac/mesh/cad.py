@@ -26,7 +26,7 @@ import ngsolve as ngs
 from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces, generate_mesh
 
 __all__ = ["OccDomain", "BoundaryConflict", "EmptyShape", "UnreadableFile", "name_boundaries",
-           "shape_from_specs", "read_shape", "DEFAULT_BOUNDARY"]
+           "shape_from_specs", "read_shape", "split_edges", "DEFAULT_BOUNDARY"]
 
 DEFAULT_BOUNDARY = "free"
 """Name of the boundary edges (faces) that neither the shape nor a selector names."""
@@ -464,6 +464,33 @@ def read_shape(path: str | Path, scale: float = 1.0) -> Any:
     if scale != 1.0:
         shape = shape.Scale(occ.Pnt(0, 0, 0), scale)
     return shape
+
+
+def split_edges(shape: Any, points: Sequence[Sequence[float]]) -> Any:
+    """``shape`` (2D) with its boundary edges split at ``points``: a vertex glued onto each
+    (``netgen.occ.Glue``), so that a circle becomes two arcs a selector can name apart.
+
+    (``shape_from_specs`` cannot do it with shapes: ``UnifySameDomain`` joins arcs of one
+    circle back into one edge, as it joins collinear segments.)
+
+    Raises
+    ------
+    BoundaryConflict
+        The shape is 3D, or a point lies on no boundary edge (within 1e-6 of the diameter).
+    """
+    from netgen import occ
+
+    if len(shape.solids):
+        raise BoundaryConflict("geometry.split_points splits edges of a 2D domain; the shape "
+                               "is 3D: remove split_points")
+    box = shape.bounding_box
+    tol = 1e-6 * math.dist(tuple(box[0]), tuple(box[1]))
+    edges = occ.Compound(list(shape.edges))
+    for i, point in enumerate(points):
+        if edges.Distance(occ.Vertex(_pnt(point))) > tol:
+            raise BoundaryConflict(f"geometry.split_points[{i}] = {list(point)} lies on no "
+                                   "boundary edge of the shape; give a point on the edge to split")
+    return occ.Glue([shape, *(occ.Vertex(_pnt(point)) for point in points)])
 
 
 # -- boundary selectors ------------------------------------------------------------------------

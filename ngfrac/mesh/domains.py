@@ -388,7 +388,7 @@ def occ_domain_of(geometry: Geometry) -> Domain:
     """
     from ..scene import SceneError
     from .cad import (BoundaryConflict, EmptyShape, UnreadableFile, name_boundaries, read_shape,
-                      shape_from_specs)
+                      shape_from_specs, split_edges)
 
     try:
         shape = (read_shape(geometry.file, geometry.scale) if geometry.file
@@ -403,6 +403,8 @@ def occ_domain_of(geometry: Geometry) -> Domain:
         text = " ".join(str(err).split())  # one line: OCC's messages span several
         raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
     try:
+        if geometry.split_points:
+            shape = split_edges(shape, geometry.split_points)
         return name_boundaries(shape, geometry.boundaries, geometry.default_boundary)
     except BoundaryConflict as err:
         raise SceneError(str(err)) from None

@@ -420,13 +420,13 @@ class Geometry(_Section):
     front (z = z0 + depth). ``occ``: ``[[geometry.shapes]]`` (:class:`Shape`) or a CAD
     ``file`` (STEP, BREP, IGES; times ``scale``), boundaries named by ``[[geometry.boundaries]]``
     (:class:`BoundarySelector`) and the file; the rest is ``default_boundary``
-    (:mod:`ngfrac.mesh.cad`).
+    (:mod:`ngfrac.mesh.cad`). ``split_points`` split boundary edges (2D) before they are named.
     """
 
     SECTION: ClassVar[str] = "geometry"
     KINDS: ClassVar[tuple[str, ...]] = ("rectangle", "box", "occ")
     OCC_KEYS: ClassVar[tuple[str, ...]] = ("shapes", "boundaries", "file", "scale",
-                                           "default_boundary")
+                                           "default_boundary", "split_points")
     BOUNDARIES: ClassVar[tuple[str, ...]] = ("bottom", "right", "top", "left")
     BOUNDARIES_3D: ClassVar[tuple[str, ...]] = ("left", "right", "bottom", "top", "back", "front")
     width: float = math.nan
@@ -443,6 +443,9 @@ class Geometry(_Section):
     file: str = ""
     scale: float = 1.0
     default_boundary: str = "free"
+    split_points: tuple[tuple[float, ...], ...] = ()
+    """Points on boundary edges of a 2D occ domain where an edge is split in two (e.g. a
+    hole's circle into two arcs, so that selectors can name each)."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -487,6 +490,9 @@ class Geometry(_Section):
                  [f"{shape.type}" for shape in self.shapes],
                  "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
         _require(self.scale > 0, s, "scale", self.scale, "must be > 0")
+        for point in self.split_points:
+            _require(len(point) == 2, s, "split_points", [list(p) for p in self.split_points],
+                     "give points [x, y] on the edges of a 2D domain")
         _require(bool(self.default_boundary) and self.default_boundary != "crack", s,
                  "default_boundary", self.default_boundary, "give a name other than '' and 'crack'")
         if self.shapes:

@@ -149,6 +149,8 @@ BAD_CAD: dict[str, tuple[Callable[[Path], dict[str, Any]], str]] = {
                                                             {"name": "base", "box": [[0, 0], [1, 0]]}]),
                                  r"geometry.boundaries\[0\] \('bottom'\) and geometry.boundaries\[2\] "
                                  r"\('base'\) claim the same edge"),
+    "split point on no edge": (_with_geometry(split_points=[[0.5, 0.5]]),
+                               r"geometry.split_points\[0\] = \[0.5, 0.5\] lies on no boundary edge"),
     "crack outside the plate": (_with("cracks", [{"points": [[0.0, 0.2], [1.3, 0.2]]}]),
                                 r"cracks\[0\].points: point \[1.3, 0.2\] lies outside the domain"),
     "crack ends in the hole": (_with("cracks", [{"points": [[0.0, 0.5], [0.5, 0.5]]}]),

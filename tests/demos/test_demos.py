@@ -263,7 +263,9 @@ CHECKS = {"mode3_slit": check_slit, "mode3_slit_at1": check_slit_at1, "mode3_str
 
 TESTED_ELSEWHERE = {"notched_cylinder": "tests/demos/test_step_specimen.py",
                     "l_panel": "tests/demos/test_specimens.py",
-                    "three_point_bending": "tests/demos/test_specimens.py"}
+                    "three_point_bending": "tests/demos/test_specimens.py",
+                    "compact_tension": "tests/demos/test_specimens.py",
+                    "three_hole_beam": "tests/demos/test_specimens.py"}
 """Demos whose quick run and physics check live in a file of their own."""
 
 
