@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -72,6 +73,46 @@ def run_keeping_stepper(scene: Scene, out_dir: str | Path,
 
     summary = run_scene(scene, out_dir, overwrite=True, on_step=keep)
     return summary, last[0]
+
+
+@dataclass
+class SpecimenRun:
+    """A specimen demo's run: its scene, summary, last stepper and history, and the load curve
+    (displacement ``u`` and ``force`` of the loaded boundary, as the demo orients them)."""
+
+    scene: Scene
+    summary: RunSummary
+    stepper: PhaseFieldStepper
+    history: dict
+    out: Path
+    u: np.ndarray
+    force: np.ndarray
+
+    @property
+    def peak(self) -> int:
+        """The row of the largest force."""
+        return int(np.argmax(self.force))
+
+    def plot(self, label: tuple[str, str], estimate: tuple[float, float] | None = None,
+             unit: str = " mm") -> Path:
+        """``force_displacement.png`` in the run's folder (:func:`plot_force_displacement`)."""
+        return plot_force_displacement(
+            self.u, self.force, self.out / "force_displacement.png",
+            f"{self.scene.name}: epsilon = {self.scene.phase_field.epsilon:g}{unit}", label,
+            estimate=estimate)
+
+
+def run_specimen(scene_file: Path, out_dir: str | Path, overrides: Sequence[str],
+                 on_step: Callable[[PhaseFieldStepper], None] | None,
+                 columns: tuple[str, str], sign: float = 1.0) -> SpecimenRun:
+    """Run ``scene_file`` into ``out_dir`` keeping the last stepper, and read its load curve:
+    the history ``columns`` (displacement, force) times ``sign`` (-1 for a downward load)."""
+    scene = load_scene(scene_file, list(overrides))
+    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
+    out = Path(out_dir)
+    history = read_history(out / "history.csv")
+    return SpecimenRun(scene, summary, stepper, history, out, sign * history[columns[0]],
+                       sign * history[columns[1]])
 
 
 def measure_kink_both_ways(stepper: PhaseFieldStepper, scene: Scene, history: dict,

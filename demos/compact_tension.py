@@ -26,10 +26,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, Scene, load_scene
-from ngfrac.io.plotting import read_history
+from ngfrac import PhaseFieldStepper, RunSummary, Scene
 
-from _common import command_line, plot_force_displacement, run_keeping_stepper, write_json
+from _common import command_line, run_specimen, write_json
 
 SCENE = Path(__file__).with_suffix(".toml")
 WIDTH, CRACK_TIP = 40.0, 20.0
@@ -83,16 +82,11 @@ def lefm_stiffness(scene: Scene) -> float:
 
 def main(out_dir: str | Path = "out/compact_tension", overrides: Sequence[str] = (),
          on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
-    scene = load_scene(SCENE, list(overrides))
-    summary, _ = run_keeping_stepper(scene, out_dir, on_step)
-    out = Path(out_dir)
-    history = read_history(out / "history.csv")
-    u, force = history["uy_pin_top"], history["Fy_pin_top"]
-    peak = int(np.argmax(force))
+    run = run_specimen(SCENE, out_dir, overrides, on_step, ("uy_pin_top", "Fy_pin_top"))
+    scene, summary, history, out = run.scene, run.summary, run.history, run.out
+    u, force, peak = run.u, run.force, run.peak
     p_c = lefm_onset(scene)
-    plot_force_displacement(u, force, out / "force_displacement.png",
-                            f"{scene.name}: epsilon = {scene.phase_field.epsilon:g} mm",
-                            ("F_y pin", "u_y pin"), estimate=(p_c / lefm_stiffness(scene), p_c))
+    run.plot(("F_y pin", "u_y pin"), estimate=(p_c / lefm_stiffness(scene), p_c))
     tip_x, tip_y = history["tip_x"], history["tip_y"]
     write_json(out / "peak.json", {"peak_force_kN": float(force[peak]),
                                    "u_at_peak_mm": float(u[peak]),

@@ -20,10 +20,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, load_scene
-from ngfrac.io.plotting import read_history
+from ngfrac import PhaseFieldStepper, RunSummary
 
-from _common import command_line, plot_force_displacement, run_keeping_stepper, write_json
+from _common import command_line, run_specimen, write_json
 
 SCENE = Path(__file__).with_suffix(".toml")
 CORNER = np.array([250.0, 250.0])
@@ -32,15 +31,11 @@ CORNER = np.array([250.0, 250.0])
 
 def main(out_dir: str | Path = "out/l_panel", overrides: Sequence[str] = (),
          on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
-    scene = load_scene(SCENE, list(overrides))
-    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
-    out = Path(out_dir)
-    history = read_history(out / "history.csv")
-    u, force = history["uy_load"], history["Fy_load"]
-    peak = int(np.argmax(force))
-    plot_force_displacement(u, force, out / "force_displacement.png",
-                            f"{scene.name}: epsilon = {scene.phase_field.epsilon:g} mm",
-                            ("F_y load", "u_y load"))
+    run = run_specimen(SCENE, out_dir, overrides, on_step, ("uy_load", "Fy_load"))
+    run.plot(("F_y load", "u_y load"))
+    scene, summary, stepper, history, out = (run.scene, run.summary, run.stepper, run.history,
+                                             run.out)
+    u, force, peak = run.u, run.force, run.peak
     nucleus = stepper.nucleus
     distance = (float(np.linalg.norm(nucleus[:2] - CORNER)) if nucleus is not None
                 else float("nan"))

@@ -24,10 +24,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, load_scene
-from ngfrac.io.plotting import read_history
+from ngfrac import PhaseFieldStepper, RunSummary
 
-from _common import command_line, plot_force_displacement, run_keeping_stepper, write_json
+from _common import command_line, run_specimen, write_json
 
 SCENE = Path(__file__).with_suffix(".toml")
 STEP_FILE = SCENE.with_suffix(".step")
@@ -82,15 +81,11 @@ def initial_stiffness(history: dict[str, np.ndarray]) -> float:
 def main(out_dir: str | Path = "out/notched_cylinder", overrides: Sequence[str] = (),
          on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
     write_step_file()
-    scene = load_scene(SCENE, list(overrides))
-    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
-    out = Path(out_dir)
-    history = read_history(out / "history.csv")
-    u, force = history["uz_top"], history["Fz_top"]
-    peak = int(np.argmax(force))
-    plot_force_displacement(u, force, out / "force_displacement.png",
-                            f"{scene.name}: epsilon = {scene.phase_field.epsilon:g}",
-                            ("F_z top", "u_z top"))
+    run = run_specimen(SCENE, out_dir, overrides, on_step, ("uz_top", "Fz_top"))
+    run.plot(("F_z top", "u_z top"), unit="")
+    scene, summary, stepper, history, out = (run.scene, run.summary, run.stepper, run.history,
+                                             run.out)
+    u, force, peak = run.u, run.force, run.peak
     k, bounds = initial_stiffness(history), stiffness(scene.material.E)
     nucleus = stepper.nucleus
     root = (float(np.hypot(nucleus[0], nucleus[1])), float(nucleus[2])) if nucleus is not None else None

@@ -17,10 +17,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ngfrac import PhaseFieldStepper, RunSummary, load_scene
-from ngfrac.io.plotting import read_history
+from ngfrac import PhaseFieldStepper, RunSummary
 
-from _common import command_line, plot_force_displacement, run_keeping_stepper, write_json
+from _common import command_line, run_specimen, write_json
 
 SCENE = Path(__file__).with_suffix(".toml")
 KIRSCH_POINTS = np.array([[0.4, 0.5], [0.6, 0.5]])
@@ -29,15 +28,11 @@ KIRSCH_POINTS = np.array([[0.4, 0.5], [0.6, 0.5]])
 
 def main(out_dir: str | Path = "out/plate_hole", overrides: Sequence[str] = (),
          on_step: Callable[[PhaseFieldStepper], None] | None = None) -> RunSummary:
-    scene = load_scene(SCENE, list(overrides))
-    summary, stepper = run_keeping_stepper(scene, out_dir, on_step)
-    out = Path(out_dir)
-    history = read_history(out / "history.csv")
-    u, force = history["uy_top"], history["Fy_top"]
-    peak = int(np.argmax(force))
-    plot_force_displacement(u, force, out / "force_displacement.png",
-                            f"{scene.name}: epsilon = {scene.phase_field.epsilon:g} mm",
-                            ("F_y top", "u_y top"))
+    run = run_specimen(SCENE, out_dir, overrides, on_step, ("uy_top", "Fy_top"))
+    run.plot(("F_y top", "u_y top"))
+    scene, summary, stepper, history, out = (run.scene, run.summary, run.stepper, run.history,
+                                             run.out)
+    u, force, peak = run.u, run.force, run.peak
     nucleus = stepper.nucleus
     distance = (float(np.min(np.linalg.norm(KIRSCH_POINTS - nucleus[:2], axis=1)))
                 if nucleus is not None else float("nan"))
