@@ -21,7 +21,6 @@ import csv
 import math
 import os
 import resource
-import shutil
 import statistics
 import subprocess
 import sys
@@ -40,18 +39,13 @@ changes a few times."""
 
 
 def launcher() -> list[str]:
-    """The environment's ``mpiexec`` with the flags Open MPI needs to oversubscribe (as root)."""
-    mpiexec = Path(sys.executable).parent / "mpiexec"
-    if not mpiexec.exists():
-        found = shutil.which("mpiexec")
-        if found is None:
-            sys.exit("mpi_scaling: no mpiexec; install the extra: pip install -e .[mpi]")
-        mpiexec = Path(found)
-    version = subprocess.run([str(mpiexec), "--version"], capture_output=True, text=True).stdout
-    if "Open MPI" in version:
-        return [str(mpiexec), "--oversubscribe",
-                *(["--allow-run-as-root"] if os.geteuid() == 0 else [])]
-    return [str(mpiexec)]
+    """The environment's ``mpiexec`` (:func:`ngfrac.parallel.mpiexec_command`), or exit."""
+    from ngfrac.parallel import mpiexec_command
+
+    command = mpiexec_command()
+    if command is None:
+        sys.exit("mpi_scaling: no mpi4py or no mpiexec of its MPI; pip install -e .[mpi]")
+    return command
 
 
 def run(processes: int, sets: list[str], out: Path) -> dict[str, float]:

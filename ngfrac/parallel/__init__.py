@@ -7,6 +7,7 @@ launched with ``mpirun -np N``, N > 1, or :class:`MPICommunicator`); the serial 
 """
 from .communicator import (SERIAL, Communicator, MPICommunicator, ParallelError, Serial,
                            launched_rank, launched_size, world)
+from .launcher import mpiexec_command
 
 __all__ = ["SERIAL", "Communicator", "MPICommunicator", "ParallelError", "Serial",
-           "launched_rank", "launched_size", "world"]
+           "launched_rank", "launched_size", "mpiexec_command", "world"]

@@ -11,10 +11,8 @@ gets ``--oversubscribe``, MPICH oversubscribes by default). 3 processes: Netgen'
 from __future__ import annotations
 
 import csv
-import importlib.util
 import math
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -68,31 +66,11 @@ def _run(command: list[str], timeout: float = TIMEOUT) -> subprocess.CompletedPr
     return subprocess.CompletedProcess(command, process.returncode, out, err)
 
 
-def _launcher() -> list[str] | None:
-    """mpiexec of the MPI that mpi4py loads, with the flag to oversubscribe if it needs one."""
-    if importlib.util.find_spec("mpi4py") is None:
-        return None
-    library = subprocess.run([sys.executable, "-c", "from mpi4py import MPI; "
-                              "print(MPI.Get_library_version())"], capture_output=True, text=True,
-                             timeout=60, env=_env()).stdout
-    candidates = [str(Path(sys.executable).parent / "mpiexec"), shutil.which("mpiexec"),
-                  shutil.which("mpirun")]
-    for candidate in candidates:
-        if not candidate or not os.access(candidate, os.X_OK):
-            continue
-        version = subprocess.run([candidate, "--version"], capture_output=True, text=True,
-                                 timeout=60).stdout
-        if "MPICH" in library and "HYDRA" in version.upper():
-            return [candidate]
-        if "Open MPI" in library and "Open MPI" in version:
-            as_root = ["--allow-run-as-root"] if os.geteuid() == 0 else []  # else it refuses
-            return [candidate, "--oversubscribe", *as_root]
-    return None
-
-
 @pytest.fixture(scope="module")
 def launcher() -> list[str]:
-    found = _launcher()
+    from ngfrac.parallel import mpiexec_command
+
+    found = mpiexec_command(env=_env())
     if found is None:
         pytest.skip("mpi4py or an mpiexec of its MPI is missing (pip install ngfrac[mpi])")
     return found
