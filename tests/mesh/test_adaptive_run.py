@@ -50,7 +50,9 @@ def adaptive_run():
 
 
 def _adaptive_run():
-    scene = scene_from(demo_data(), "phase_field.epsilon=0.04", "time.dt=1e-3",
+    # Steps of 2e-3 (76 steps, 10 mesh changes; 14 s of CPU against 19 s for 151 steps of
+    # 1e-3 with 12 changes, at load ~5): every check below passed with both.
+    scene = scene_from(demo_data(), "phase_field.epsilon=0.04", "time.dt=2e-3",
                        f"adaptivity.max_vertices={CAP}", f"adaptivity.hmin={HMIN}")
     stepper = PhaseFieldStepper(scene)
     watch = TransferWatch(stepper)
