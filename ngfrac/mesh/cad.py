@@ -26,7 +26,7 @@ import ngsolve as ngs
 from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces, generate_mesh
 
 __all__ = ["OccDomain", "BoundaryConflict", "EmptyShape", "UnreadableFile", "name_boundaries",
-           "shape_from_specs", "read_shape", "split_edges", "DEFAULT_BOUNDARY"]
+           "shape_from_specs", "read_shape", "split_edges", "connected_pieces", "DEFAULT_BOUNDARY"]
 
 DEFAULT_BOUNDARY = "free"
 """Name of the boundary edges (faces) that neither the shape nor a selector names."""
@@ -464,6 +464,30 @@ def read_shape(path: str | Path, scale: float = 1.0) -> Any:
     if scale != 1.0:
         shape = shape.Scale(occ.Pnt(0, 0, 0), scale)
     return shape
+
+
+def connected_pieces(shape: Any) -> int:
+    """How many separate pieces ``shape`` is: its solids (a solid shape) or faces (a planar
+    one), joined where two share a face (an edge). ``shape_from_specs`` merges shapes that
+    touch into one face (solid), so there a count above one means a cut split the domain or a
+    shape does not touch the others; a file may hold several faces of one part, which share
+    edges. OCC's hash of a sub-shape is that of the shared topological entity, whatever
+    its orientation in either neighbour."""
+    parts, sub = (shape.solids, "faces") if len(shape.solids) else (shape.faces, "edges")
+    parent = list(range(len(parts)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner: dict[int, int] = {}
+    for i, part in enumerate(parts):
+        for boundary in getattr(part, sub):
+            j = owner.setdefault(hash(boundary), i)
+            parent[root(i)] = root(j)
+    return len({root(i) for i in range(len(parts))})
 
 
 def split_edges(shape: Any, points: Sequence[Sequence[float]]) -> Any:

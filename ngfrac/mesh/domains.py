@@ -384,11 +384,11 @@ def occ_domain_of(geometry: Geometry) -> Domain:
     ------
     SceneError
         A selector matches nothing, two names claim one part, the file is missing or cannot
-        be read, or the shapes (the file) leave no face or solid.
+        be read, or the shapes (the file) leave no face or solid or several separate pieces.
     """
     from ..scene import SceneError
-    from .cad import (BoundaryConflict, EmptyShape, UnreadableFile, name_boundaries, read_shape,
-                      shape_from_specs, split_edges)
+    from .cad import (BoundaryConflict, EmptyShape, UnreadableFile, connected_pieces,
+                      name_boundaries, read_shape, shape_from_specs, split_edges)
 
     try:
         shape = (read_shape(geometry.file, geometry.scale) if geometry.file
@@ -402,6 +402,12 @@ def occ_domain_of(geometry: Geometry) -> Domain:
         what = f"file = {geometry.file!r}" if geometry.file else "shapes"
         text = " ".join(str(err).split())  # one line: OCC's messages span several
         raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
+    pieces = connected_pieces(shape)
+    if pieces > 1:  # each piece would need its own supports: a singular u-problem otherwise
+        source = f"geometry.file = {geometry.file!r} holds" if geometry.file else "geometry.shapes make"
+        raise SceneError(f"{source} {pieces} separate pieces (a cut through the domain, or a "
+                         "shape that touches no other); ngfrac meshes one connected part: "
+                         "join or remove the pieces")
     try:
         if geometry.split_points:
             shape = split_edges(shape, geometry.split_points)

@@ -87,7 +87,8 @@ def _with_geometry(**geometry: Any) -> Callable[[Path], dict[str, Any]]:
 def _from_file(name: str, text: str | None = None, shape: str = "", model: str = "",
                **geometry: Any) -> Callable[[Path], dict[str, Any]]:
     """The plate read from a file in ``folder``: ``text`` written as is, or a netgen.occ
-    ``shape`` ("face": the unit square, "box": the unit cube) written as STEP, or no file."""
+    ``shape`` ("face": the unit square, "box": the unit cube, "two faces": the square and another
+    one beside it) written as STEP, or no file."""
     def make(folder: Path) -> dict[str, Any]:
         path = folder / name
         if text is not None:
@@ -95,8 +96,10 @@ def _from_file(name: str, text: str | None = None, shape: str = "", model: str =
         elif shape:
             from netgen import occ
 
-            part = (occ.WorkPlane().Rectangle(1, 1).Face() if shape == "face"
-                    else occ.Box(occ.Pnt(0, 0, 0), occ.Pnt(1, 1, 1)))
+            square = occ.WorkPlane().Rectangle(1, 1).Face()
+            part = {"face": square, "box": occ.Box(occ.Pnt(0, 0, 0), occ.Pnt(1, 1, 1)),
+                    "two faces": occ.Glue([square, occ.WorkPlane().MoveTo(2, 0).Rectangle(1, 1).Face()])
+                    }[shape]
             part.WriteStep(str(path))
         data = _plate(folder)
         data["geometry"] = {"kind": "occ", "file": str(path),
@@ -173,6 +176,20 @@ BAD_CAD: dict[str, tuple[Callable[[Path], dict[str, Any]], str]] = {
         {"type": "box", "corner": [0.0, 0.0, 0.0], "size": [1.0, 1.0, 1.0]},
         {"type": "sphere", "center": [0.5, 0.5, 0.5], "radius": 2.0, "op": "cut"}], boundaries=[]),
         r"geometry.shapes\[1\] \(cut sphere\) leaves nothing of the domain"),
+    "cut splits the plate": (_with_geometry(shapes=[
+        {"type": "rectangle", "corner": [0.0, 0.0], "size": [1.0, 1.0]},
+        {"type": "rectangle", "corner": [-0.5, 0.45], "size": [2.0, 0.1], "op": "cut"}]),
+        r"geometry.shapes make 2 separate pieces \(a cut through the domain"),
+    "a shape apart from the plate": (_with_geometry(shapes=[
+        {"type": "rectangle", "corner": [0.0, 0.0], "size": [1.0, 1.0]},
+        {"type": "circle", "center": [2.0, 0.5], "radius": 0.1}]),
+        r"geometry.shapes make 2 separate pieces"),
+    "3d solids apart": (_with_geometry(shapes=[
+        {"type": "box", "corner": [0.0, 0.0, 0.0], "size": [1.0, 1.0, 1.0]},
+        {"type": "sphere", "center": [3.0, 0.5, 0.5], "radius": 0.5}], boundaries=[]),
+        r"geometry.shapes make 2 separate pieces"),
+    "cad file of two parts": (_from_file("two.step", shape="two faces"),
+                              r"geometry.file = '.*two.step' holds 2 separate pieces"),
 }
 """Bad CAD inputs (issue #12, item 5): each is one line, exit 2, in ``ngfrac check`` and ``run``."""
 
