@@ -159,7 +159,8 @@ def _growth_direction(points: np.ndarray, members: np.ndarray, s: np.ndarray, ow
     other = position[neighbours]
     use = other >= 0
     owner, other = owner[use], other[use]
-    offset = points[members[other]] - points[members[owner]]
+    # np.take gathers rows 2-3x faster than fancy indexing, with the same values
+    offset = np.take(points, members[other], axis=0) - np.take(points, members[owner], axis=0)
     ds = s[other] - s[owner]
     dim = points.shape[1]
     normal = np.zeros((len(members), dim, dim))
@@ -186,9 +187,9 @@ def _ridge(graph: sparse.csr_matrix, points: np.ndarray, z: np.ndarray, members:
     owner = np.repeat(np.arange(len(members)), np.diff(indptr))
     direction = _growth_direction(points, members, s, owner, neighbours)
     has_direction = np.any(direction != 0, axis=1)
-    offset = points[neighbours] - points[members[owner]]
+    offset = np.take(points, neighbours, axis=0) - np.take(points, members[owner], axis=0)
     offset /= np.linalg.norm(offset, axis=1)[:, None]
-    along = np.abs(np.einsum("ij,ij->i", offset, direction[owner]))
+    along = np.abs(np.einsum("ij,ij->i", offset, np.take(direction, owner, axis=0)))
     across = along <= ACROSS_COS
     higher = across & (z[neighbours] > z[members[owner]])
     blocked = np.bincount(owner[higher], minlength=len(members)) > 0
