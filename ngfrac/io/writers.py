@@ -22,13 +22,14 @@ is written; :class:`RunFolder` holds the manifest and what the writers share.
 from __future__ import annotations
 
 import contextlib
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Iterator
 
 import numpy as np
 
-from .checkpoint import save_checkpoint
+from .checkpoint import save_checkpoint, save_state
 from .output import (HistoryWriter, Manifest, VTKSeries, atomic_write_text, prepare_output_dir,
                      run_metadata, to_toml, write_run_json)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -46,6 +47,8 @@ __all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "
            "Plots", "Progress", "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers",
            "default_writers", "run_info", "snapshot_due", "write_crack_path", "write_opening",
            "write_plots", "write_snapshot"]
+
+log = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.h5"
 PLOTS = ("history.png", "crack.png", "force_displacement.png")
@@ -259,9 +262,22 @@ class VTKSnapshots(Writer):
 
     def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if self.restart:
-            self.series.resume(stepper.t)
+            self._resume(stepper)
         elif self.every:
             write_snapshot(self.series, stepper)
+
+    def _resume(self, stepper: "PhaseFieldStepper") -> None:
+        """The kept snapshots; in an MPI job rank 0 rewrites the series, the other ranks
+        read it afterwards (each names its parts of the next snapshot by the count)."""
+        comm = stepper.mesh.comm
+        if comm.size == 1:
+            self.series.resume(stepper.t)
+            return
+        if comm.rank == 0:
+            self.series.resume(stepper.t)
+        comm.Barrier()
+        if comm.rank != 0:
+            self.series.resume(stepper.t, write=False)
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if snapshot_due(stepper):
@@ -276,17 +292,35 @@ class VTKSnapshots(Writer):
 
 class Checkpoints(Writer):
     """``checkpoint.h5`` every ``output.checkpoint_every`` steps
-    (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically)."""
+    (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically).
 
-    def __init__(self, folder: RunFolder, scene: Scene) -> None:
+    In an MPI job every rank has one (the fields are gathered to rank 0, which writes the
+    serial checkpoint: :func:`ngfrac.parallel.checkpoints.gather_state`); ``folder`` is None
+    on the ranks other than 0.
+    """
+
+    def __init__(self, folder: RunFolder | None, scene: Scene) -> None:
         self.folder = folder
         self.every = scene.output.checkpoint_every
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        if self.every and record.step % self.every == 0:
-            with (stepper.timer.phase("output: checkpoint"),
-                  self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp")):
-                save_checkpoint(stepper, self.folder.path / CHECKPOINT)
+        if not (self.every and record.step % self.every == 0):
+            return
+        if stepper.comm.distributed:
+            self._save_distributed(stepper)
+            return
+        with (stepper.timer.phase("output: checkpoint"),
+              self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp")):
+            save_checkpoint(stepper, self.folder.path / CHECKPOINT)
+
+    def _save_distributed(self, stepper: "PhaseFieldStepper") -> None:
+        from ..parallel.checkpoints import gather_state
+
+        with stepper.timer.phase("output: checkpoint"):
+            state = gather_state(stepper)  # collective; the serial state on rank 0
+            if self.folder is not None:
+                with self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp"):
+                    save_state(state, stepper.scene, self.folder.path / CHECKPOINT)
 
 
 def write_crack_path(out: Path, stepper: "PhaseFieldStepper") -> Path:
@@ -409,7 +443,10 @@ def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list
     """
     vtk = VTKSnapshots(folder, scene)
     writers: list[Writer] = [HistoryCSV(folder)]
-    if scene.output.results:
+    if scene.output.results and folder.restart and not (folder.path / "results.h5").exists():
+        log.warning("no results.h5 in %s to continue (the run was distributed, docs/parallel.md); "
+                    "the restart writes none", folder.path)
+    elif scene.output.results:
         writers.append(ResultsH5(folder, scene))
     writers += [vtk, Checkpoints(folder, scene), CrackPathCSV(folder)]
     if scene.phase_field.pressurized and scene.cracks and scene.geometry.dim == 2:
