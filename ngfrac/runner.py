@@ -30,9 +30,9 @@ from .environment import set_threads
 from .io.checkpoint import CheckpointState, resume
 from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
                         to_toml, write_run_json)
-from .io.writers import (CHECKPOINT, PLOTS, Checkpoints, HistoryCSV, RunFolder, VTKSnapshots,
-                         Writer, Writers, default_writers, run_info, write_crack_path,
-                         write_plots, write_snapshot)
+from .io.writers import (CHECKPOINT, PLOTS, Checkpoints, GatheredResults, HistoryCSV,
+                         RunFolder, VTKSnapshots, Writer, Writers, default_writers, run_info,
+                         write_crack_path, write_plots, write_snapshot)
 from .parallel.communicator import SERIAL, Communicator, ParallelError, world
 from .scene import Scene
 from .scene.checks import ResolutionWarning, resolution_warnings
@@ -220,18 +220,18 @@ def _exit_code(error: BaseException) -> int:
 
 def _mpi_writers(folder: RunFolder | None, out_dir: Path, scene: Scene, comm: Communicator,
                  writers: Sequence[Writer], restart: bool) -> list[Writer]:
-    """The writers of an MPI run: history.csv and the given ones on rank 0, the VTK series
-    (a part per rank, listed by rank 0) and the checkpoints (gathered to rank 0, which
-    writes them) on every rank."""
+    """The writers of an MPI run: history.csv and the given ones on rank 0; on every rank
+    the VTK series (a part per rank, listed by rank 0), the checkpoints and results.h5 with
+    crack_path.csv (gathered to rank 0, which writes them)."""
     if not comm.is_root:
         vtk = VTKSnapshots(RunFolder(out_dir, None, restart=restart), scene)  # type: ignore[arg-type]
         comm.barrier()  # rank 0 has made vtk/
-        return [vtk, Checkpoints(None, scene)]
-    log.warning("under MPI ngfrac writes history.csv, vtk/ and checkpoint.h5 only (no "
-                "results.h5, crack path or plots yet; docs/parallel.md)")
+        return [vtk, Checkpoints(None, scene), GatheredResults(None, scene, restart)]
+    log.info("under MPI ngfrac writes no plots and no opening.csv (docs/parallel.md)")
     vtk = VTKSnapshots(folder, scene)
     comm.barrier()
-    return [HistoryCSV(folder), vtk, Checkpoints(folder, scene), *writers]
+    return [HistoryCSV(folder), vtk, Checkpoints(folder, scene),
+            GatheredResults(folder, scene, restart), *writers]
 
 
 def _run(scene: Scene, out_dir: Path, overwrite: bool,

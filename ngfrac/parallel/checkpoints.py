@@ -13,8 +13,11 @@ run continues on any number of processes, or serially (:func:`ngfrac.io.checkpoi
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+import ngsolve as ngs
 
 from ..io.checkpoint import CheckpointError, CheckpointState, load_checkpoint
 from ..solve.state import STATE_FIELDS, StepperState, copy_of
@@ -24,7 +27,29 @@ if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper
     from .communicator import MPICommunicator
 
-__all__ = ["gather_state", "load_on_root", "resume_distributed"]
+__all__ = ["SerialView", "gather_state", "gather_view", "load_on_root", "resume_distributed"]
+
+
+@dataclass(frozen=True, eq=False)
+class SerialView:
+    """What the serial writers of results.h5 and crack_path.csv read of a stepper, on rank
+    0's serial mesh (:func:`gather_view`)."""
+
+    scene: "Scene"
+    mesh: ngs.Mesh
+    u: ngs.GridFunction
+    z: ngs.GridFunction
+    k: int
+    t: float
+
+
+def gather_view(stepper: "PhaseFieldStepper") -> SerialView | None:
+    """u and z of the stepper gathered to rank 0's serial mesh (None on the other ranks).
+    Collective."""
+    serial = stepper.comm.serial_copy(stepper.scene).gather(stepper.fields, ("u", "z"))
+    if serial is None:
+        return None
+    return SerialView(stepper.scene, serial.mesh, serial.u, serial.z, stepper.k, stepper.t)
 
 
 def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:

@@ -169,6 +169,37 @@ def test_plane_strain_fixed_mesh_gives_the_serial_history(tmp_path, mpiexec):
             name = f"fields_{snapshot:05d}_proc{rank}.vtu"
             assert (tmp_path / "mpi" / "vtk" / name).stat().st_size > 0
             assert f'part="{rank}" file="{name}"' in collection
+    _same_results(tmp_path / "serial", tmp_path / "mpi")
+
+
+def _same_results(serial: Path, mpi: Path) -> None:
+    """results.h5 (history rows, snapshot steps, u and z at the vertices of each snapshot's
+    mesh) and crack_path.csv of the MPI run (written by rank 0 from u and z gathered onto the
+    serial mesh) equal the serial run's within :data:`CG_RTOL` of each field's largest value.
+    Measured (plane strain): the z and u values differ by at most 4e-11 and 1.3e-11."""
+    import h5py
+    import numpy as np
+
+    with h5py.File(serial / "results.h5", "r") as a, h5py.File(mpi / "results.h5", "r") as b:
+        assert a["history"].shape == b["history"].shape
+        assert list(a["snapshots"]) == list(b["snapshots"]) and len(a["snapshots"]) == 3
+        for name in a["snapshots"]:
+            one, other = a["snapshots"][name], b["snapshots"][name]
+            assert one.attrs["step"] == other.attrs["step"]
+            for field in ("u", "z"):
+                x, y = one["vertex_values"][field][()], other["vertex_values"][field][()]
+                assert x.shape == y.shape
+                assert np.abs(x - y).max() <= CG_RTOL * max(np.abs(x).max(), 1e-300), (name, field)
+    a, b = _rows(serial / "crack_path.csv"), _rows(mpi / "crack_path.csv")
+    assert [row[0] for row in a] == [row[0] for row in b] and len(a) > 2  # tip rows, ridge rows
+    for one, other in zip(a[1:], b[1:]):
+        assert [float(v) for v in one[1:]] == pytest.approx([float(v) for v in other[1:]],
+                                                            rel=0, abs=CG_RTOL)
+
+
+def _rows(path: Path) -> list[list[str]]:
+    with open(path, newline="") as handle:
+        return list(csv.reader(line for line in handle if not line.startswith("#")))
 
 
 MOVED_EXACTLY = r"""
