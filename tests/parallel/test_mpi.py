@@ -91,6 +91,12 @@ def _ngfrac_run(scene: str, sets: list[str], out: Path, prefix: list[str] = ()) 
     return _run(command)
 
 
+def _ngfrac_lines(stderr: str) -> list[str]:
+    """ngfrac's lines on stderr, stripped: the launcher interleaves its own output with the
+    ranks' (a line may come after a space of Open MPI's abort notice)."""
+    return [line.strip() for line in stderr.splitlines() if line.strip().startswith("ngfrac:")]
+
+
 def _history(path: Path) -> dict[str, list[float]]:
     with open(path, newline="") as handle:
         rows = list(csv.reader(line for line in handle if not line.startswith("#")))
@@ -274,7 +280,7 @@ def test_a_failure_on_one_rank_ends_the_job_in_one_line(tmp_path, mpiexec):
               f"run_scene(scene, {str(tmp_path / 'run')!r}, plots=False, on_step=fail)\n")
     result = _run([*mpiexec, sys.executable, "-c", script])
     assert result.returncode != 0
-    lines = [line for line in result.stderr.splitlines() if line.startswith("ngfrac:")]
+    lines = _ngfrac_lines(result.stderr)
     assert lines == ["ngfrac: rank 1 of 3: RuntimeError: injected"], result.stderr
 
 
@@ -317,7 +323,7 @@ def killed_mpi_run(tmp_path_factory, mpiexec) -> Path:
     out = tmp_path_factory.mktemp("killed") / "run"
     result = _killed(out, mpiexec, rank=1)
     assert result.returncode != 0
-    lines = [line for line in result.stderr.splitlines() if line.startswith("ngfrac:")]
+    lines = _ngfrac_lines(result.stderr)
     assert lines == ["ngfrac: rank 1 of 3: RuntimeError: injected"], result.stderr
     assert _checkpoint_step(out) == 6 and not (out / "checkpoint.tmp").exists()
     assert _history(out / "history.csv")["step"] == list(range(9))  # rows up to the failure
