@@ -27,12 +27,12 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .environment import set_threads
-from .io.checkpoint import resume
+from .io.checkpoint import CheckpointState, resume
 from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
                         to_toml, write_run_json)
-from .io.writers import (CHECKPOINT, PLOTS, HistoryCSV, RunFolder, VTKSnapshots, Writer,
-                         Writers, default_writers, run_info, write_crack_path, write_plots,
-                         write_snapshot)
+from .io.writers import (CHECKPOINT, PLOTS, Checkpoints, GatheredResults, HistoryCSV,
+                         RunFolder, VTKSnapshots, Writer, Writers, default_writers, run_info,
+                         write_crack_path, write_plots, write_snapshot)
 from .parallel.communicator import SERIAL, Communicator, ParallelError, world
 from .scene import Scene
 from .scene.checks import ResolutionWarning, resolution_warnings
@@ -61,24 +61,53 @@ def open_run(scene: Scene, out: Path, overwrite: bool = False,
     <ngfrac.io.writers.RunFolder.create>`) or of a restart from the folder's checkpoint
     (its scene and the restart recorded by :func:`record_restart`).
 
-    In an MPI job (``comm``) only rank 0 has the folder (None on the others) and a restart
-    is refused (:class:`~ngfrac.parallel.ParallelError`).
+    In an MPI job (``comm``) only rank 0 has the folder (None on the others); a restart reads
+    the serial checkpoint on rank 0, distributes its mesh and scatters its fields
+    (:func:`ngfrac.parallel.checkpoints.resume_distributed`); rank 0 alone updates the folder.
+    Collective in an MPI job.
     """
-    if comm.distributed and restart:
-        raise ParallelError("restart under MPI is not supported yet; continue the run serially "
-                            "(ngfrac run --restart DIR without mpirun)")
+    checkpoint = None
+    if restart and comm.distributed:
+        checkpoint = _checkpoint_on_root(out / CHECKPOINT, scene, comm)
+    return _open(scene, out, overwrite, restart, comm, checkpoint)
+
+
+def _open(scene: Scene, out: Path, overwrite: bool, restart: bool, comm: Communicator,
+          checkpoint: CheckpointState | None) -> tuple[PhaseFieldStepper, RunFolder | None]:
+    """:func:`open_run` with an MPI restart's checkpoint read (by :func:`_checkpoint_on_root`)."""
     if not restart:
         folder = RunFolder.create(out, scene, overwrite) if comm.is_root else None
         return PhaseFieldStepper(scene, comm=comm), folder
-    checkpoint = out / CHECKPOINT
-    if not checkpoint.exists():
-        raise OutputError(f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
-                          "(written every output.checkpoint_every steps)")
-    stepper = resume(checkpoint, scene)
+    path = out / CHECKPOINT
+    if comm.distributed:
+        from .parallel.checkpoints import resume_distributed
+
+        stepper = resume_distributed(checkpoint, scene, comm)
+        if not comm.is_root:
+            return stepper, None
+    else:
+        if not path.exists():
+            raise OutputError(_no_checkpoint(out))
+        stepper = resume(path, scene)
     manifest = Manifest.load(out) or Manifest.adopt(out)
     manifest.save()
     info = record_restart(out, scene, stepper, manifest)
     return stepper, RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
+
+
+def _no_checkpoint(out: Path) -> str:
+    return (f"no checkpoint in {str(out)!r}; a restart needs {CHECKPOINT} "
+            "(written every output.checkpoint_every steps)")
+
+
+def _checkpoint_on_root(path: Path, scene: Scene, comm: Communicator) -> CheckpointState | None:
+    """The checkpoint read on rank 0 of an MPI job; a missing or unusable one raises the
+    same error on every rank (one line from rank 0, no Abort)."""
+    from .parallel.checkpoints import load_on_root
+
+    if not comm.comm.bcast(path.exists() if comm.is_root else None, root=0):
+        raise OutputError(_no_checkpoint(path.parent))
+    return load_on_root(path, scene, comm)
 
 
 def _flat_keys(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -169,9 +198,12 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     set_threads()
     comm = world() if comm is None else comm
     comm.check(scene)  # the same on every rank: refused before anything is written
+    checkpoint = None
+    if restart and comm.distributed:  # a missing or foreign checkpoint: alike on every rank
+        checkpoint = _checkpoint_on_root(Path(out_dir) / CHECKPOINT, scene, comm)
     with comm.guard(_exit_code):
         return _run(scene, Path(out_dir), overwrite, on_record, plots, on_step, restart,
-                    on_start, writers, comm)
+                    on_start, writers, comm, checkpoint)
 
 
 def _exit_code(error: BaseException) -> int:
@@ -187,33 +219,34 @@ def _exit_code(error: BaseException) -> int:
 
 
 def _mpi_writers(folder: RunFolder | None, out_dir: Path, scene: Scene, comm: Communicator,
-                 writers: Sequence[Writer]) -> list[Writer]:
-    """The writers of an MPI run: history.csv and the given ones on rank 0, the VTK series
-    on every rank (a part per rank, listed by rank 0)."""
+                 writers: Sequence[Writer], restart: bool) -> list[Writer]:
+    """The writers of an MPI run: history.csv and the given ones on rank 0; on every rank
+    the VTK series (a part per rank, listed by rank 0), the checkpoints and results.h5 with
+    crack_path.csv (gathered to rank 0, which writes them)."""
     if not comm.is_root:
-        vtk = VTKSnapshots(RunFolder(out_dir, None), scene)  # type: ignore[arg-type]
+        vtk = VTKSnapshots(RunFolder(out_dir, None, restart=restart), scene)  # type: ignore[arg-type]
         comm.barrier()  # rank 0 has made vtk/
-        return [vtk]
-    log.warning("under MPI ngfrac writes history.csv and vtk/ only (no results.h5, "
-                "checkpoints, crack path or plots yet; docs/parallel.md)")
+        return [vtk, Checkpoints(None, scene), GatheredResults(None, scene, restart)]
+    log.info("under MPI ngfrac writes no plots and no opening.csv (docs/parallel.md)")
     vtk = VTKSnapshots(folder, scene)
     comm.barrier()
-    return [HistoryCSV(folder), vtk, *writers]
+    return [HistoryCSV(folder), vtk, Checkpoints(folder, scene),
+            GatheredResults(folder, scene, restart), *writers]
 
 
 def _run(scene: Scene, out_dir: Path, overwrite: bool,
          on_record: Callable[[StepRecord], None] | None, plots: bool,
          on_step: Callable[[PhaseFieldStepper], None] | None, restart: bool,
          on_start: Callable[[PhaseFieldStepper], None] | None, writers: Sequence[Writer],
-         comm: Communicator) -> RunSummary:
+         comm: Communicator, checkpoint: CheckpointState | None = None) -> RunSummary:
     """:func:`run_scene` after its checks."""
     started = time.perf_counter()
-    stepper, folder = open_run(scene, out_dir, overwrite, restart, comm)
+    stepper, folder = _open(scene, out_dir, overwrite, restart, comm, checkpoint)
     stepper.timer.add("set-up (mesh, spaces, z0, u0)", time.perf_counter() - started)
     if on_start is not None:
         on_start(stepper)
     if comm.distributed:
-        defaults, writers = _mpi_writers(folder, out_dir, scene, comm, writers), ()
+        defaults, writers = _mpi_writers(folder, out_dir, scene, comm, writers, restart), ()
     else:
         defaults = default_writers(folder, scene, plots)
     record = stepper.record()

@@ -311,8 +311,10 @@ class VTKSeries:
         return self.manifest.writing(*(path + "/" if not name else path
                                        for name, path in zip(names, relative)))
 
-    def resume(self, t: float) -> None:
-        """Keep the snapshots of an earlier run up to time ``t`` (for a restart)."""
+    def resume(self, t: float, write: bool = True) -> None:
+        """Keep the snapshots of an earlier run up to time ``t`` (for a restart); ``write``:
+        rewrite the collection (False on the ranks of an MPI job other than 0, which only
+        need the count for the next file names)."""
         import re
 
         collection = self.folder / f"{self.stem}.pvd"
@@ -321,8 +323,10 @@ class VTKSeries:
         pattern = re.compile(r'timestep="([^"]+)"[^>]*file="([^"]+)"')
         entries = [(float(m.group(1)), m.group(2)) for m in pattern.finditer(collection.read_text())]
         self.entries = [(time_, file) for time_, file in entries if time_ <= t * (1 + 1e-12) + 1e-300]
-        self._count = len(self.entries)
-        self._write_collection()
+        # a snapshot of a distributed run has one entry per part (NAME_procR.vtu)
+        self._count = len({file.rsplit("_proc", 1)[0] for _, file in self.entries})
+        if write:
+            self._write_collection()
 
     def estimate_bytes(self, mesh: ngs.Mesh, n_components: int) -> int:
         """The size of one ``.vtu`` of ``mesh`` with fields of ``n_components`` values in all.

@@ -22,13 +22,14 @@ is written; :class:`RunFolder` holds the manifest and what the writers share.
 from __future__ import annotations
 
 import contextlib
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Iterator
 
 import numpy as np
 
-from .checkpoint import save_checkpoint
+from .checkpoint import save_checkpoint, save_state
 from .output import (HistoryWriter, Manifest, VTKSeries, atomic_write_text, prepare_output_dir,
                      run_metadata, to_toml, write_run_json)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -42,10 +43,13 @@ from ..scene.checks import resolution_warnings
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "OpeningCSV",
+__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "GatheredResults", "HistoryCSV",
+           "OpeningCSV",
            "Plots", "Progress", "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers",
            "default_writers", "run_info", "snapshot_due", "write_crack_path", "write_opening",
            "write_plots", "write_snapshot"]
+
+log = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.h5"
 PLOTS = ("history.png", "crack.png", "force_displacement.png")
@@ -259,9 +263,22 @@ class VTKSnapshots(Writer):
 
     def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if self.restart:
-            self.series.resume(stepper.t)
+            self._resume(stepper)
         elif self.every:
             write_snapshot(self.series, stepper)
+
+    def _resume(self, stepper: "PhaseFieldStepper") -> None:
+        """The kept snapshots; in an MPI job rank 0 rewrites the series, the other ranks
+        read it afterwards (each names its parts of the next snapshot by the count)."""
+        comm = stepper.mesh.comm
+        if comm.size == 1:
+            self.series.resume(stepper.t)
+            return
+        if comm.rank == 0:
+            self.series.resume(stepper.t)
+        comm.Barrier()
+        if comm.rank != 0:
+            self.series.resume(stepper.t, write=False)
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if snapshot_due(stepper):
@@ -276,17 +293,35 @@ class VTKSnapshots(Writer):
 
 class Checkpoints(Writer):
     """``checkpoint.h5`` every ``output.checkpoint_every`` steps
-    (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically)."""
+    (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically).
 
-    def __init__(self, folder: RunFolder, scene: Scene) -> None:
+    In an MPI job every rank has one (the fields are gathered to rank 0, which writes the
+    serial checkpoint: :func:`ngfrac.parallel.checkpoints.gather_state`); ``folder`` is None
+    on the ranks other than 0.
+    """
+
+    def __init__(self, folder: RunFolder | None, scene: Scene) -> None:
         self.folder = folder
         self.every = scene.output.checkpoint_every
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        if self.every and record.step % self.every == 0:
-            with (stepper.timer.phase("output: checkpoint"),
-                  self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp")):
-                save_checkpoint(stepper, self.folder.path / CHECKPOINT)
+        if not (self.every and record.step % self.every == 0):
+            return
+        if stepper.comm.distributed:
+            self._save_distributed(stepper)
+            return
+        with (stepper.timer.phase("output: checkpoint"),
+              self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp")):
+            save_checkpoint(stepper, self.folder.path / CHECKPOINT)
+
+    def _save_distributed(self, stepper: "PhaseFieldStepper") -> None:
+        from ..parallel.checkpoints import gather_state
+
+        with stepper.timer.phase("output: checkpoint"):
+            state = gather_state(stepper)  # collective; the serial state on rank 0
+            if self.folder is not None:
+                with self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp"):
+                    save_state(state, stepper.scene, self.folder.path / CHECKPOINT)
 
 
 def write_crack_path(out: Path, stepper: "PhaseFieldStepper") -> Path:
@@ -311,6 +346,64 @@ class CrackPathCSV(Writer):
     def finish(self, stepper: "PhaseFieldStepper") -> None:
         with stepper.timer.phase("output: crack path"), self.folder.manifest.writing("crack_path.csv"):
             write_crack_path(self.folder.path, stepper)
+
+
+class GatheredResults(Writer):
+    """``results.h5`` (and ``results.xdmf``) and ``crack_path.csv`` of an MPI run, on every
+    rank: at each snapshot (:func:`snapshot_due`) and at the end u and z are gathered to rank
+    0's serial mesh (:func:`ngfrac.parallel.checkpoints.gather_view`), where the serial
+    writers (:class:`ResultsH5`, :func:`write_crack_path`) write them; ``folder`` is None on
+    the other ranks. After :class:`HistoryCSV` (the crack path reads history.csv)."""
+
+    def __init__(self, folder: RunFolder | None, scene: Scene, restart: bool = False) -> None:
+        self.folder = folder
+        self.scene = scene
+        self.restart = restart
+        self.results = _results_h5(folder, scene) if folder is not None else None
+
+    def _view(self, stepper: "PhaseFieldStepper") -> Any:
+        from ..parallel.checkpoints import gather_view
+
+        with stepper.timer.phase("output: VTK and snapshots"):
+            return gather_view(stepper)
+
+    def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
+        snapshot = self.scene.output.results and self.scene.output.vtk_every
+        view = self._view(stepper) if snapshot and not self.restart else None
+        if self.results is not None:
+            self.results.start(view if view is not None else _Counters(stepper), record)
+
+    def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
+        if not self.scene.output.results:
+            return
+        view = self._view(stepper) if snapshot_due(stepper) else None
+        writer = self.results.writer if self.results is not None else None
+        if writer is None:
+            return
+        if record.has_diagnostics:
+            writer.append(record)
+        if view is not None:
+            writer.write_snapshot(view)
+
+    def finish(self, stepper: "PhaseFieldStepper") -> None:
+        view = self._view(stepper)
+        if self.results is not None:
+            self.results.close()
+        if self.folder is not None:
+            with (stepper.timer.phase("output: crack path"),
+                  self.folder.manifest.writing("crack_path.csv")):
+                write_crack_path(self.folder.path, view)
+
+    def close(self) -> None:
+        if self.results is not None:
+            self.results.close()
+
+
+class _Counters:
+    """The step and time of a stepper (what :class:`ResultsH5` reads at a restart)."""
+
+    def __init__(self, stepper: "PhaseFieldStepper") -> None:
+        self.k, self.t = stepper.k, stepper.t
 
 
 OPENING_HALF_WIDTH = 10.0
@@ -398,6 +491,17 @@ class Progress(Writer):
             self.bar.close()
 
 
+def _results_h5(folder: RunFolder, scene: Scene) -> ResultsH5 | None:
+    """The results.h5 writer when ``output.results`` (none for a restart of a folder without
+    results.h5, e.g. of a distributed run before ngfrac wrote one there: a warning)."""
+    if not scene.output.results:
+        return None
+    if folder.restart and not (folder.path / "results.h5").exists():
+        log.warning("no results.h5 in %s to continue; the restart writes none", folder.path)
+        return None
+    return ResultsH5(folder, scene)
+
+
 def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list[Writer]:
     """The writers of ``ngfrac run``, in the order they are called.
 
@@ -409,8 +513,9 @@ def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list
     """
     vtk = VTKSnapshots(folder, scene)
     writers: list[Writer] = [HistoryCSV(folder)]
-    if scene.output.results:
-        writers.append(ResultsH5(folder, scene))
+    results = _results_h5(folder, scene)
+    if results is not None:
+        writers.append(results)
     writers += [vtk, Checkpoints(folder, scene), CrackPathCSV(folder)]
     if scene.phase_field.pressurized and scene.cracks and scene.geometry.dim == 2:
         writers.append(OpeningCSV(folder))

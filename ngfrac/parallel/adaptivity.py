@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from .communicator import MPICommunicator
 
-__all__ = ["DistributedMeshAdapter", "MeshChangeCost", "node_dofs"]
+__all__ = ["DistributedMeshAdapter", "MeshChangeCost", "SerialCopy", "node_dofs"]
 
 log = logging.getLogger(__name__)
 
@@ -203,13 +203,116 @@ class _RootCopy:
         return cls(fields, index)
 
 
+SPACE_OF = {"u": "u", "u_prev": "u", "z": "z"}
+"""The field whose dof matching a field uses (u_prev lives in u's space)."""
+
+
+class SerialCopy:
+    """On rank 0 a serial copy of a distributed run's fields, dof for dof (made on every
+    rank; the other ranks take part in the gathers and scatters).
+
+    The copy is matched to the current distributed mesh once (:class:`_RootCopy`, collective):
+    on the mesh rank 0 gave :meth:`distribute`, or else on a copy of the communicator's
+    serial mesh (the scene's first mesh). Mesh changes (:class:`DistributedMeshAdapter`) and
+    checkpoints (:mod:`ngfrac.parallel.checkpoints`) share it, so a checkpoint after a mesh
+    change matches nothing again.
+
+    Parameters
+    ----------
+    scene : Scene
+    comm : MPICommunicator
+    """
+
+    def __init__(self, scene: "Scene", comm: "MPICommunicator") -> None:
+        self.scene = scene
+        self.comm = comm
+        self.model = make_model(scene)
+        self.fields: MeshFields | None = None
+        """This rank's fields of the last gather or scatter."""
+        self._mesh: ngs.Mesh | None = None
+        self._root: _RootCopy | None = None
+        self._next_serial: MeshFields | ngs.Mesh | None = None
+
+    @property
+    def mesh(self) -> ngs.Mesh | None:
+        """The distributed mesh the copy is matched to."""
+        return self._mesh
+
+    @property
+    def root_fields(self) -> MeshFields | None:
+        """On rank 0 the serial fields (None elsewhere and before the first match)."""
+        return self._root.fields if self.comm.is_root and self._root is not None else None
+
+    def serial_fields(self, mesh: ngs.Mesh) -> MeshFields:
+        """Zero serial fields of the scene on ``mesh`` (rank 0's)."""
+        return MeshFields.on(mesh, self.scene, self.model)
+
+    def attach(self, fields: MeshFields) -> None:
+        """Match ``fields`` (this rank's, on the current distributed mesh) to rank 0's serial
+        copy of the same mesh (collective, once per mesh; later fields on the same mesh
+        share the match)."""
+        if self._mesh is fields.mesh:
+            self.fields = fields
+            return
+        layouts = self.comm.comm.gather(_NodeLayout.of(fields), root=0)
+        if self.comm.is_root:
+            serial = self._next_serial
+            if serial is None:  # the scene's first mesh: the communicator kept it
+                serial = ngs.Mesh(self.comm.serial_ngmesh.Copy())
+            if isinstance(serial, ngs.Mesh):
+                serial = self.serial_fields(serial)
+            self._root = _RootCopy.match(serial, layouts)
+        self._next_serial = None
+        self._mesh, self.fields = fields.mesh, fields
+
+    def distribute(self, serial: MeshFields | ngs.Mesh | None) -> ngs.Mesh:
+        """The new mesh (rank 0's ``serial`` mesh, or its fields' mesh; None elsewhere)
+        distributed; the next :meth:`attach` matches rank 0's ``serial`` to it."""
+        if self.comm.is_root:
+            mesh = serial.mesh if isinstance(serial, MeshFields) else serial
+            distributed = self.comm.distribute(lambda: mesh)
+            self._next_serial = serial
+            return distributed
+        return self.comm.distribute(None)
+
+    def gather(self, fields: MeshFields, names: tuple[str, ...] = GATHERED) -> MeshFields | None:
+        """Rank 0's copy gets the coefficients of ``names`` of every rank's ``fields``;
+        returns the copy on rank 0, None elsewhere. Collective."""
+        self.attach(fields)
+        sent = [getattr(fields, name).vec.FV().NumPy().copy() for name in names]
+        gathered = self.comm.comm.gather(sent, root=0)
+        if not self.comm.is_root:
+            return None
+        for i, name in enumerate(names):
+            values = getattr(self._root.fields, name).vec.FV().NumPy()
+            for index, rank_values in zip(self._root.index, gathered):
+                values[index[SPACE_OF[name]]] = rank_values[i]
+        return self._root.fields
+
+    def scatter(self, fields: MeshFields, names: tuple[str, ...] = GATHERED) -> None:
+        """Every rank's ``names`` of ``fields`` from rank 0's copy; u_prev = u when u_prev
+        is not among them (as after a mesh change). Collective."""
+        self.attach(fields)
+        parts = None
+        if self.comm.is_root:
+            serial = {name: getattr(self._root.fields, name).vec.FV().NumPy() for name in names}
+            parts = [[serial[name][index[SPACE_OF[name]]] for name in names]
+                     for index in self._root.index]
+        mine = self.comm.comm.scatter(parts, root=0)
+        for name, values in zip(names, mine):
+            getattr(fields, name).vec.FV().NumPy()[:] = values
+        if "u_prev" not in names:
+            fields.u_prev.vec.data = fields.u.vec
+
+
 class DistributedMeshAdapter(MeshAdapter):
     """The :class:`~ngfrac.mesh.adapter.MeshAdapter` of an MPI run (made on every rank).
 
-    Rank 0 holds a serial copy of the current fields (:class:`_RootCopy`) and runs the serial
-    adapter's code on it; the other ranks take part in the gathers, the distribution of each
-    new mesh and the scatters, and receive the adapter's state after every change (so
-    :attr:`adaptations`, :attr:`eta_total` and the tip are the same on every rank).
+    Rank 0 holds a serial copy of the current fields (:class:`SerialCopy`, the
+    communicator's) and runs the serial adapter's code on it; the other ranks take part in
+    the gathers, the distribution of each new mesh and the scatters, and receive the
+    adapter's state after every change (so :attr:`adaptations`, :attr:`eta_total` and the tip
+    are the same on every rank).
 
     Parameters
     ----------
@@ -221,78 +324,34 @@ class DistributedMeshAdapter(MeshAdapter):
     def __init__(self, scene: "Scene", comm: "MPICommunicator") -> None:
         super().__init__(scene)
         self.comm = comm
-        self.model = make_model(scene)
+        self.copy = comm.serial_copy(scene)
+        """Rank 0's serial copy of the fields (shared with the checkpoints)."""
         self.costs: list[MeshChangeCost] = []
         """The seconds of each distributed mesh change (rank 0's clock)."""
-        self._fields: MeshFields | None = None
-        self._root: _RootCopy | None = None
-        self._next_serial: MeshFields | ngs.Mesh | None = None
 
     # -- the serial copy on rank 0 --------------------------------------------------------------
-    def _serial_fields(self, mesh: ngs.Mesh) -> MeshFields:
-        return MeshFields.on(mesh, self.scene, self.model)
-
-    def _attach(self, fields: MeshFields) -> None:
-        """Match ``fields`` (this rank's, on the current distributed mesh) to rank 0's serial
-        copy of the same mesh (collective, once per mesh)."""
-        if self._fields is fields:
-            return
-        layouts = self.comm.comm.gather(_NodeLayout.of(fields), root=0)
-        if self.comm.is_root:
-            serial = self._next_serial
-            if serial is None:  # the scene's first mesh: the communicator kept it
-                serial = ngs.Mesh(self.comm.serial_ngmesh.Copy())
-            if isinstance(serial, ngs.Mesh):
-                serial = self._serial_fields(serial)
-            self._root = _RootCopy.match(serial, layouts)
-        self._next_serial = None
-        self._fields = fields
-
     def _distribute(self, serial: MeshFields | ngs.Mesh | None) -> ngs.Mesh:
-        """The new mesh (rank 0's ``serial`` mesh, or its fields' mesh) distributed."""
-        if self.comm.is_root:
-            self._next_serial = serial
-            mesh = serial.mesh if isinstance(serial, MeshFields) else serial
-            return self.comm.distribute(lambda: mesh)
-        return self.comm.distribute(None)
+        return self.copy.distribute(serial)
 
     def _gather(self, fields: MeshFields, names: tuple[str, ...] = GATHERED) -> None:
-        """Rank 0's copy gets the coefficients of ``names`` of every rank's ``fields``."""
-        self._attach(fields)
-        sent = [getattr(fields, name).vec.FV().NumPy().copy() for name in names]
-        gathered = self.comm.comm.gather(sent, root=0)
-        if not self.comm.is_root:
-            return
-        for i, name in enumerate(names):
-            values = getattr(self._root.fields, name).vec.FV().NumPy()
-            for index, rank_values in zip(self._root.index, gathered):
-                values[index[name]] = rank_values[i]
+        self.copy.gather(fields, names)
 
     def gather(self, fields: MeshFields) -> MeshFields | None:
         """Rank 0's serial copy of ``fields`` (this rank's fields on the current distributed
         mesh) with the coefficients of u and z of every rank; None on the other ranks.
         Collective."""
-        self._gather(fields)
-        return self._root.fields if self.comm.is_root else None
+        return self.copy.gather(fields)
 
     @property
     def serial_fields(self) -> MeshFields | None:
         """On rank 0 the serial copy as it is: right after a mesh change the transferred u
         and z that were sent to the ranks, after a gather the ranks' values (the remesh
         test gathers z only); None elsewhere."""
-        return self._root.fields if self.comm.is_root and self._root is not None else None
+        return self.copy.root_fields
 
-    def _scatter(self, fields: MeshFields) -> None:
-        """Every rank's u and z (u_prev = u) from rank 0's copy."""
-        self._attach(fields)
-        parts = None
-        if self.comm.is_root:
-            serial = {name: getattr(self._root.fields, name).vec.FV().NumPy() for name in GATHERED}
-            parts = [[serial[name][index[name]] for name in GATHERED] for index in self._root.index]
-        mine = self.comm.comm.scatter(parts, root=0)
-        for name, values in zip(GATHERED, mine):
-            getattr(fields, name).vec.FV().NumPy()[:] = values
-        fields.u_prev.vec.data = fields.u.vec
+    @property
+    def _root_fields(self) -> MeshFields:
+        return self.copy.root_fields
 
     def _share_state(self) -> None:
         """Rank 0's adapter state (tip, sizes, learned constants, the changes) on every rank."""
@@ -305,13 +364,13 @@ class DistributedMeshAdapter(MeshAdapter):
     def wants_new_mesh(self, mesh: ngs.Mesh, nodes: Any, z_values: np.ndarray,
                        tip: np.ndarray) -> str | None:
         """Rank 0's answer (the serial test on the whole mesh), the same on every rank."""
-        fields = self._fields
+        fields = self.copy.fields
         if fields is None or fields.mesh is not mesh:
             raise RuntimeError("wants_new_mesh: not the mesh of the last distributed change")
         self._gather(fields, ("z",))
         reason = None
         if self.comm.is_root:
-            root = self._root.fields
+            root = self._root_fields
             reason = super().wants_new_mesh(root.mesh, root.nodes, root.z_values(), tip)
         return self.comm.comm.bcast(reason, root=0)
 
@@ -327,19 +386,19 @@ class DistributedMeshAdapter(MeshAdapter):
         gathered = time.perf_counter()
         serial = record = None
         if self.comm.is_root:
-            serial, record = super().change(self._root.fields, tip, step, reason,
-                                            self._serial_fields, None, solves)
+            serial, record = super().change(self._root_fields, tip, step, reason,
+                                            self.copy.serial_fields, None, solves)
         changed = time.perf_counter()
         mesh = self._distribute(serial)
         distributed = time.perf_counter()
         new = rebuild(mesh)
         rebuilt = time.perf_counter()
-        self._scatter(new)
+        self.copy.scatter(new)
         if relax is not None and self.settings.relax_core:
             self._relax_core(new, relax(new), tip)  # node-wise: on each rank's own nodes
             self._gather(new, ("z",))
             if self.comm.is_root:
-                root = self._root.fields
+                root = self._root_fields
                 self.remember(root.mesh, root.nodes, root.z_values(), tip)
         scattered = time.perf_counter()
         if self.comm.is_root:
@@ -368,14 +427,14 @@ class DistributedMeshAdapter(MeshAdapter):
             self._gather(fields, ("z",))
             mesh = None
             if self.comm.is_root:
-                root = self._root.fields
+                root = self._root_fields
                 with solves():
                     mesh, _ = self.new_mesh(root.mesh, root.nodes, root.z, at)
             fields = initial_state(self._distribute(mesh))
         at = tip(fields)
         self._gather(fields, ("z",))
         if self.comm.is_root:
-            root = self._root.fields
+            root = self._root_fields
             self.remember(root.mesh, root.nodes, root.z_values(), at)
         self._share_state()
         return fields

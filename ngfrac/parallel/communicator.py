@@ -190,6 +190,7 @@ class MPICommunicator:
         self._serial_ngmesh: Any = None
         self._nv = 0
         self._mirror: _RootMirror | None = None
+        self._copy: Any = None
         self._warned_p1 = False
 
     # -- the scene and the mesh ---------------------------------------------------------------
@@ -236,6 +237,16 @@ class MPICommunicator:
         """On rank 0 the undistributed Netgen mesh of the last :meth:`distribute` (None
         elsewhere)."""
         return self._serial_ngmesh
+
+    def serial_copy(self, scene: "Scene") -> Any:
+        """Rank 0's serial copy of the run's fields
+        (:class:`~ngfrac.parallel.adaptivity.SerialCopy`), one per communicator and scene:
+        mesh changes and checkpoints share its dof matching."""
+        from .adaptivity import SerialCopy
+
+        if self._copy is None or self._copy.scene is not scene:
+            self._copy = SerialCopy(scene, self)
+        return self._copy
 
     def mesh_adapter(self, scene: "Scene") -> "MeshAdapter":
         """A :class:`~ngfrac.parallel.adaptivity.DistributedMeshAdapter`: the serial

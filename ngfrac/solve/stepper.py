@@ -62,7 +62,8 @@ class PhaseFieldStepper:
     comm : Communicator, optional
         The processes of the run (:mod:`ngfrac.parallel`): one (the default) or an MPI job
         (:class:`~ngfrac.parallel.MPICommunicator`; the mesh is made on rank 0 and
-        distributed, so neither ``mesh`` nor ``state`` can be given).
+        distributed, so no ``mesh`` can be given, and a ``state`` must be on the distributed
+        mesh: :func:`ngfrac.parallel.checkpoints.resume_distributed`).
 
     Examples
     --------
@@ -77,9 +78,11 @@ class PhaseFieldStepper:
         self.comm: Communicator = SERIAL if comm is None else comm
         """The processes of the run (:mod:`ngfrac.parallel`)."""
         self.comm.check(scene)
-        if self.comm.distributed and (mesh is not None or state is not None):
-            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene; a given "
-                                "mesh or state (restart) is not supported yet")
+        if self.comm.distributed and (mesh is not None or state is not None
+                                      and state.mesh.comm.size != self.comm.size):
+            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene or a "
+                                "checkpoint; a given mesh or serial state is not supported: "
+                                "use ngfrac.parallel.checkpoints.resume_distributed")
         self.model = make_model(scene)
         self.crack_model = crack_model(scene.phase_field.model)
         """The phase-field functional (:mod:`ngfrac.physics.crack_models`)."""
