@@ -93,8 +93,10 @@ def _ngfrac_run(scene: str, sets: list[str], out: Path, prefix: list[str] = ()) 
 
 def _ngfrac_lines(stderr: str) -> list[str]:
     """ngfrac's lines on stderr, stripped: the launcher interleaves its own output with the
-    ranks' (a line may come after a space of Open MPI's abort notice)."""
-    return [line.strip() for line in stderr.splitlines() if line.strip().startswith("ngfrac:")]
+    ranks' (a line may come after a space of Open MPI's abort notice, or after the NUL byte
+    that ends it: seen once in 9 runs of the killed run, ``'...---\n\x00ngfrac: rank 1 ...'``)."""
+    stripped = (line.strip(" \t\r\x00") for line in stderr.splitlines())
+    return [line for line in stripped if line.startswith("ngfrac:")]
 
 
 def _history(path: Path) -> dict[str, list[float]]:
@@ -269,21 +271,6 @@ def test_box3d_gives_the_serial_history_across_a_mesh_change(tmp_path, mpiexec):
     assert history["Fy_top"][-1] > 0  # loaded: the force is compared
 
 
-def test_a_failure_on_one_rank_ends_the_job_in_one_line(tmp_path, mpiexec):
-    script = ("import sys\n"
-              "from ngfrac import load_scene\n"
-              "from ngfrac.runner import run_scene\n"
-              f"scene = load_scene({str(ROOT / PLANE_STRAIN[0])!r}, {PLANE_STRAIN[1]!r})\n"
-              "def fail(stepper):\n"
-              "    if stepper.k == 2 and stepper.comm.rank == 1:\n"
-              "        raise RuntimeError('injected')\n"
-              f"run_scene(scene, {str(tmp_path / 'run')!r}, plots=False, on_step=fail)\n")
-    result = _run([*mpiexec, sys.executable, "-c", script])
-    assert result.returncode != 0
-    lines = _ngfrac_lines(result.stderr)
-    assert lines == ["ngfrac: rank 1 of 3: RuntimeError: injected"], result.stderr
-
-
 KILLED_AT = r"""
 from ngfrac import load_scene
 from ngfrac.runner import run_scene
@@ -328,6 +315,13 @@ def killed_mpi_run(tmp_path_factory, mpiexec) -> Path:
     assert _checkpoint_step(out) == 6 and not (out / "checkpoint.tmp").exists()
     assert _history(out / "history.csv")["step"] == list(range(9))  # rows up to the failure
     return out
+
+
+def test_a_failure_on_one_rank_ends_the_job_in_one_line(killed_mpi_run):
+    """Rank 1 raises after step 8 (:data:`KILLED_AT`): the job ends with that rank's one line
+    and a non-zero status, the checkpoint of step 6 intact (asserted by the fixture; this
+    test was a run of its own, the same failure two steps into a fixed-mesh run)."""
+    assert _checkpoint_step(killed_mpi_run) == 6
 
 
 def _restart(folder: Path, prefix: list[str] = ()) -> subprocess.CompletedProcess:
@@ -379,7 +373,7 @@ def test_a_restart_under_mpi_without_a_checkpoint_fails_in_one_line(tmp_path, mp
     result = _run([*mpiexec, sys.executable, "-m", "ngfrac", "run", "--restart", str(folder),
                    "--no-progress"])
     assert result.returncode == 2
-    lines = [line for line in result.stderr.splitlines() if line.startswith("ngfrac: error")]
+    lines = [line for line in _ngfrac_lines(result.stderr) if line.startswith("ngfrac: error")]
     assert len(lines) == 1 and "no checkpoint in" in lines[0], result.stderr
 
 
@@ -387,7 +381,7 @@ def test_an_adaptive_scene_of_order_3_is_refused_in_one_line(tmp_path, mpiexec):
     result = _ngfrac_run("demos/mode3_slit.toml", ["discretization.order=3"], tmp_path / "run",
                          mpiexec)
     assert result.returncode == 2
-    lines = [line for line in result.stderr.splitlines() if line.startswith("ngfrac: error")]
+    lines = [line for line in _ngfrac_lines(result.stderr) if line.startswith("ngfrac: error")]
     assert len(lines) == 1 and "adaptivity under MPI moves P1/P2 fields only" in lines[0], \
         result.stderr
     assert not (tmp_path / "run").exists()  # refused before anything is written
