@@ -1,5 +1,6 @@
 """The command line: exit codes, one-line errors without traceback, outputs."""
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -48,9 +49,15 @@ def test_missing_scene_file(tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def test_run_writes_outputs_and_refuses_to_overwrite(tmp_path):
-    out = tmp_path / "run"
-    result = ngfrac("run", SLIT, "--out", str(out), *QUICK)
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    """A finished run of the slit (QUICK, plots included) and its CompletedProcess."""
+    out = tmp_path_factory.mktemp("quick") / "run"
+    return out, ngfrac("run", SLIT, "--out", str(out), *QUICK)
+
+
+def test_run_writes_outputs_and_refuses_to_overwrite(quick_run):
+    out, result = quick_run
     assert result.returncode == 0, result.stderr
     for name in ("history.csv", "scene.toml", "history.png", "crack.png", "vtk/fields.pvd"):
         assert (out / name).exists(), name
@@ -61,7 +68,7 @@ def test_run_writes_outputs_and_refuses_to_overwrite(tmp_path):
     again = ngfrac("run", SLIT, "--out", str(out), *QUICK)
     assert again.returncode == 2 and "--overwrite" in again.stderr
     assert (out / "history.csv").read_text() == before  # nothing lost
-    assert ngfrac("run", SLIT, "--out", str(out), "--overwrite", *QUICK).returncode == 0
+    # a run with --overwrite into it: tests/io/test_output_folder.py (what it keeps and removes)
 
 
 def test_restart_continues_a_killed_run_exactly(tmp_path):
@@ -92,9 +99,10 @@ def test_restart_without_checkpoint_is_a_clear_error(tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def test_plot_command(tmp_path):
+def test_plot_command(quick_run, tmp_path):
+    assert quick_run[1].returncode == 0, quick_run[1].stderr
     out = tmp_path / "run"
-    assert ngfrac("run", SLIT, "--out", str(out), *QUICK).returncode == 0
+    shutil.copytree(quick_run[0], out)  # the other test reads the original
     result = ngfrac("plot", str(out))
     assert result.returncode == 0, result.stderr
     assert (out / "plots" / "history.png").exists()
