@@ -43,8 +43,11 @@ QUICK_EXTRA = {
 }
 """Per-demo quick overrides, applied after QUICK."""
 
-MIN_STEPS = {"sneddon": 10, "mode3_stripes": 40, "box3d": 35}
-"""Steps a quick run must check z's bounds over (50 unless given here)."""
+MIN_STEPS = {"sneddon": 10, "mode3_stripes": 40, "box3d": 25}
+"""Steps a quick run must check z's bounds over (50 unless given here). Measured counts
+(session 8): sneddon 11 (fixed steps, one mesh), mode3_stripes 51, box3d 36 (39 adaptive
+steps, 3 meshes: the count moves with the mesh changes and step sizes, so its minimum
+leaves room), plate_hole 135."""
 
 
 
