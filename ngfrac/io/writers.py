@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, Iterable, Iterator
 
 import numpy as np
 
-from .checkpoint import save_checkpoint, save_state
+from .checkpoint import save_state
 from .output import (HistoryWriter, Manifest, VTKSeries, atomic_write_text, prepare_output_dir,
                      run_metadata, to_toml, write_run_json)
 from .plotting import plot_force_displacement, plot_history, plot_phase_field, read_history
@@ -307,18 +307,10 @@ class Checkpoints(Writer):
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if not (self.every and record.step % self.every == 0):
             return
-        if stepper.comm.distributed:
-            self._save_distributed(stepper)
-            return
-        with (stepper.timer.phase("output: checkpoint"),
-              self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp")):
-            save_checkpoint(stepper, self.folder.path / CHECKPOINT)
-
-    def _save_distributed(self, stepper: "PhaseFieldStepper") -> None:
         from ..parallel.checkpoints import gather_state
 
         with stepper.timer.phase("output: checkpoint"):
-            state = gather_state(stepper)  # collective; the serial state on rank 0
+            state = gather_state(stepper)  # stepper.state(); under MPI collective, on rank 0
             if self.folder is not None:
                 with self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp"):
                     save_state(state, stepper.scene, self.folder.path / CHECKPOINT)
