@@ -31,19 +31,30 @@ class Energies:
 def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.CoefficientFunction,
              gamma: ngs.CoefficientFunction, epsilon: float, residual_stiffness: float,
              force_times_u: ngs.CoefficientFunction | None = None, order: int = 5,
-             crack_model: CrackModel | None = None) -> Energies:
-    """Integrate the three energies in one pass.
+             crack_model: CrackModel | None = None,
+             surface: tuple[float, float] | None = None) -> Energies:
+    """Integrate the energies in one pass.
 
     ``E_el = 1/2 int g(z) sigma:e`` with ``g = (1-z)^2 + eta``, ``E_surf = int gamma w``,
     ``crack_length = int w`` (the Gamma-limit of the surface term; ``w`` the crack model's
     surface density, AT2's ``1/2 (eps|grad z|^2 + z^2/eps)`` by default), and the work
-    ``int f.u`` when a body force is given.
+    ``int f.u`` when a body force is given. ``surface``, when given, is (E_surf,
+    crack_length) already computed (from the z-problem's matrices,
+    :meth:`ngfrac.solve.z_problem.PhaseFieldProblem.surface_energy`), and only E_el and the
+    work are integrated.
     """
     model = crack_model or AT2()
-    surface = model.surface_density(z, epsilon)
     elastic = 0.5 * model.degradation(z, residual_stiffness) * energy_density
-    work = force_times_u if force_times_u is not None else ngs.CoefficientFunction(0.0)
-    values = integrate(ngs.CoefficientFunction((elastic, gamma * surface, surface, work)), mesh, order=order)
+    if surface is not None:
+        parts = [elastic] if force_times_u is None else [elastic, force_times_u]
+        values = integrate(ngs.CoefficientFunction(tuple(parts)), mesh, order=order)
+        values = values if isinstance(values, list) else [values]
+        work = values[1] if len(values) > 1 else 0.0
+        return Energies(values[0], surface[0], surface[1], work)
+    density = model.surface_density(z, epsilon)
+    work_cf = force_times_u if force_times_u is not None else ngs.CoefficientFunction(0.0)
+    values = integrate(ngs.CoefficientFunction((elastic, gamma * density, density, work_cf)),
+                       mesh, order=order)
     return Energies(*values)
 
 

@@ -325,7 +325,8 @@ class PhaseFieldStepper:
             e = energies(f.mesh, f.z, self.u_problem.elastic_density(), self.gamma,
                          pf.epsilon, pf.residual_stiffness,
                          None if body_force is None else body_force * f.u,
-                         order=f.integration_order, crack_model=self.crack_model)
+                         order=f.integration_order, crack_model=self.crack_model,
+                         surface=self.z_problem.surface_energy())
         extra_work = self.u_problem.surface_work()
         if extra_work is not None:
             e = dataclasses.replace(e, work=e.work + extra_work)

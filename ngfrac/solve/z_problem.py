@@ -6,10 +6,15 @@
 The crack model supplies the surface terms (:mod:`ngfrac.physics.crack_models`; AT1 adds a
 constant source). The matrix is K + (alpha2/dt) M + D(W): K and M change only with the
 mesh and are assembled once per mesh, only the drive part D is assembled per step
-(docs/benchmarks.md has the saving).
+(docs/benchmarks.md has the saving). The right-hand side needs no assembly of its own:
+int (alpha2/dt z_old + W) w = (alpha2/dt) M z_old + D 1, with 1 the coefficients of the
+constant function (the vertex dofs of the hierarchical basis), plus the source assembled
+once per mesh and the crack pressure's term per step. The surface energy is a quadratic
+form of K: E_surf = 1/2 z.K z - s.z (s the source), the same sum as its quadrature.
 """
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -67,17 +72,32 @@ class PhaseFieldProblem:
         self._m = ngs.BilinearForm(fields.fes_z, symmetric=True)
         self._m += zt * w * dx
         self._fixed_assembled = False
-        rhs = (pf.alpha2 * inv_dt * fields.z + drive) * w
         source = crack_model.source(w, gamma, eps)  # AT1: -3 gamma/(8 eps) w
+        self._source = None if source is None else ngs.LinearForm(source * dx)
+        pressure = None
         if pf.pressurized and u_drive is not None:
             pressure = -pf.crack_pressure.to_coefficient(context.time) \
                 * ngs.InnerProduct(u_drive, ngs.grad(w))
-            source = pressure if source is None else source + pressure
-        self.f_z = ngs.LinearForm((rhs if source is None else rhs + source) * dx)
+        self._pressure = None if pressure is None else ngs.LinearForm(pressure * dx)
+        self._gamma = gamma
+        self._unit_surface: tuple[ngs.BilinearForm, ngs.LinearForm | None] | None = None
+        if not isinstance(gamma, (int, float)):  # the crack length: the surface energy at gamma = 1
+            unit_k = ngs.BilinearForm(fields.fes_z, symmetric=True)
+            unit_k += crack_model.stiffness(zt, w, 1.0, eps) * dx
+            unit_source = crack_model.source(w, 1.0, eps)
+            self._unit_surface = (unit_k, None if unit_source is None
+                                  else ngs.LinearForm(unit_source * dx))
+        self.rhs = fields.z.vec.CreateVector()
+        """The right-hand side of the last sub-step."""
+        self._ones = None if context.comm.distributed else _constant_one(fields.fes_z)
         self._inverse: Any = None
         self._obstacle = NodalObstacle(fields.nodes) if update == "obstacle" else None
         self._distributed: DistributedSystem | None = None
         if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
+            rhs = (pf.alpha2 * inv_dt * fields.z + drive) * w
+            for part in (source, pressure):
+                rhs = rhs if part is None else rhs + part
+            self._distributed_rhs = ngs.LinearForm(rhs * dx)
             self._distributed = DistributedSystem(
                 fields.fes_z, (crack_model.stiffness(zt, w, gamma, eps)
                                + pf.alpha2 * inv_dt * zt * w + drive * zt * w) * dx,
@@ -91,13 +111,13 @@ class PhaseFieldProblem:
         :class:`SolverError`."""
         if self._distributed is not None:
             with self.context.timer.phase("z: assemble and solve"), self.context.threads.solves():
-                self.f_z.Assemble()
-                iterations = self._distributed.solve(self.f_z.vec, self.fields.z.vec,
+                self._distributed_rhs.Assemble()
+                self.rhs.data = self._distributed_rhs.vec
+                iterations = self._distributed.solve(self.rhs, self.fields.z.vec,
                                                      self.z_trial.vec, step)
             return iterations
         with self.context.timer.phase("z: assemble"), parallel():
-            self._assemble_matrix()
-            self.f_z.Assemble()
+            self._assemble_system()
         if self._obstacle is not None:
             with self.context.timer.phase("z: obstacle solve"), self.context.threads.solves():
                 iterations = self._solve_obstacle()
@@ -108,18 +128,53 @@ class PhaseFieldProblem:
             raise SolverError(f"the z-solve gave non-finite values at step {step}; lower time.dt")
         return iterations
 
-    def _assemble_matrix(self) -> None:
-        """a_z.mat = K + (alpha2/dt) M + D(W): D assembled, K and M once per mesh."""
-        if not self._fixed_assembled:
-            self._k.Assemble()
-            self._m.Assemble()
-            self._fixed_assembled = True
+    def _assemble_fixed(self) -> None:
+        """K, M and the source terms: once per mesh."""
+        if self._fixed_assembled:
+            return
+        forms = [self._k, self._m, self._source]
+        if self._unit_surface is not None:
+            forms += list(self._unit_surface)
+        for form in forms:
+            if form is not None:
+                form.Assemble()
+        self._fixed_assembled = True
+
+    def _assemble_system(self) -> None:
+        """a_z.mat = K + (alpha2/dt) M + D(W) (D assembled, K and M once per mesh) and
+        :attr:`rhs` = (alpha2/dt) M z_old + D 1 + source + the pressure's term."""
+        self._assemble_fixed()
         self.a_z.Assemble()
+        mass_factor = self.alpha2 * self.context.inv_dt.Get()
+        rhs, mass = self.rhs, self._m.mat
+        rhs.data = self.a_z.mat * self._ones  # int W w, before K and M join the matrix
+        rhs.data += mass_factor * (mass * self.fields.z.vec)
+        if self._source is not None:
+            rhs.data += self._source.vec
+        if self._pressure is not None:
+            self._pressure.Assemble()
+            rhs.data += self._pressure.vec
         values = self.a_z.mat.AsVector()
-        k, m = self._k.mat.AsVector(), self._m.mat.AsVector()
+        k, m = self._k.mat.AsVector(), mass.AsVector()
         if not (len(values) == len(k) == len(m)):  # never seen; the forms share fes_z
             raise RuntimeError("the z-forms do not share a sparsity pattern")
-        values.data += k + (self.alpha2 * self.context.inv_dt.Get()) * m
+        values.data += k + mass_factor * m
+
+    def surface_energy(self) -> tuple[float, float] | None:
+        """(E_surf, crack_length) of the current z from the assembled K and source.
+
+        1/2 z.K z - s.z is the crack model's surface energy summed with the forms' quadrature
+        (the same rule as the energies' integrals); the crack length is the same at gamma = 1.
+        None on a distributed mesh, whose matrices are not local.
+        """
+        if self._distributed is not None:
+            return None
+        self._assemble_fixed()
+        z = self.fields.z.vec
+        e_surf = _surface_value(self._k.mat, self._source, z)
+        if self._unit_surface is None:
+            return e_surf, e_surf / float(self._gamma)
+        return e_surf, _surface_value(self._unit_surface[0].mat, self._unit_surface[1], z)
 
     def _solve_system(self, step: int | str) -> int:
         fes, z = self.fields.fes_z, self.fields.z
@@ -127,7 +182,7 @@ class PhaseFieldProblem:
             self.z_trial.vec.data = z.vec  # z^{k-1} is a good initial guess
             cg = CGSolver(self.a_z.mat, self.a_z.mat.CreateSmoother(fes.FreeDofs()),
                           tol=1e-10, maxiter=CG_MAXITER)
-            cg.Solve(rhs=self.f_z.vec, sol=self.z_trial.vec, initialize=False)
+            cg.Solve(rhs=self.rhs, sol=self.z_trial.vec, initialize=False)
             if cg.iterations >= CG_MAXITER:
                 raise SolverError(f"the z-solve (CG) did not converge at step {step}; "
                                   "set discretization.z_solver = 'sparsecholesky'")
@@ -136,13 +191,13 @@ class PhaseFieldProblem:
             self._inverse = self.a_z.mat.Inverse(fes.FreeDofs(), inverse=self.solver)
         else:
             self._inverse.Update()
-        self.z_trial.vec.data = self._inverse * self.f_z.vec
+        self.z_trial.vec.data = self._inverse * self.rhs
         return 0
 
     def _solve_obstacle(self) -> int:
         """The sub-step as min of its quadratic energy over z >= z_old at the nodes
         (:mod:`ngfrac.solve.obstacle`); the minimizer goes to :attr:`z_trial`."""
-        solution = self._obstacle.solve(self.a_z.mat, self.f_z.vec, self.fields.z, self.z_trial)
+        solution = self._obstacle.solve(self.a_z.mat, self.rhs, self.fields.z, self.z_trial)
         if not solution.converged:
             self.context.timer.add("z: unsettled active sets", 0.0)
         return solution.iterations
@@ -180,12 +235,39 @@ class PhaseFieldProblem:
         matrix = self.a_z.mat if self._distributed is None else self._distributed.form.mat
         a_d = (matrix * direction.vec).Evaluate()
         curvature = ngs.InnerProduct(direction.vec, a_d)
-        slope = ngs.InnerProduct(z_old, a_d) - ngs.InnerProduct(self.f_z.vec, direction.vec)
+        slope = ngs.InnerProduct(z_old, a_d) - ngs.InnerProduct(self.rhs, direction.vec)
         theta = 1.0 if curvature <= 0 else min(1.0, max(0.0, -slope / curvature))
         if theta < 1.0:
             self.shortened += 1
             self.context.timer.add("z: shortened projections", 0.0)
         return old + theta * direction_nodes
+
+
+def _constant_one(fes: ngs.FESpace) -> ngs.BaseVector:
+    """The coefficients of the constant 1 in a scalar H1 space: 1 at the vertex dofs (the
+    barycentric hat functions, which sum to one), 0 at the higher-order ones."""
+    ones = ngs.GridFunction(fes).vec
+    values = ones.FV().NumPy()
+    values[:] = 0.0
+    mesh = fes.mesh
+    nv = mesh.nv
+    if nv and fes.ndof >= nv and tuple(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, nv - 1))) == (nv - 1,):
+        values[:nv] = 1.0  # H1 numbers the vertex dofs first, in vertex order
+    else:
+        for vertex in mesh.vertices:
+            for dof in fes.GetDofNrs(vertex):
+                if dof >= 0:
+                    values[dof] = 1.0
+    return ones
+
+
+def _surface_value(stiffness: Any, source: ngs.LinearForm | None, z: ngs.BaseVector) -> float:
+    """1/2 z.K z - s.z, summed with :func:`math.fsum` (independent of the thread count)."""
+    values = z.FV().NumPy()
+    terms = 0.5 * values * (stiffness * z).Evaluate().FV().NumPy()
+    if source is not None:
+        terms = terms - source.vec.FV().NumPy() * values
+    return math.fsum(terms)
 
 
 class DistributedSystem:
