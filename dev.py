@@ -3,6 +3,7 @@
 
     python3 dev.py demo     # runs demos/mode3_slit.toml into out/mode3_slit
     python3 dev.py test     # runs the test suite (extra arguments go to pytest)
+                            # on every core: see test_workers()
     python3 dev.py docs     # builds the HTML docs into docs/_build/html (arguments: sphinx-build)
 
 Only the Python standard library is used here, so this works on a machine
@@ -56,6 +57,38 @@ def ensure_environment() -> Path:
     return python
 
 
+def usable_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def test_workers(pytest_args: list[str], environ: dict[str, str]) -> tuple[list[str], dict[str, str]]:
+    """pytest's arguments and environment for a test run that uses every core.
+
+    NGFRAC_THREADS is the NGSolve threads of each test process: unset or 1 runs one pytest
+    worker per core (pytest-xdist, ``-n N --dist loadfile``: a file's tests and its fixtures
+    stay in one worker) with one thread each; a larger value runs one process with that many
+    threads, as before (a second process beside it would oversubscribe the cores, and
+    NGSolve's idle threads spin). ``-n`` or ``-p no:xdist`` among the arguments is left as
+    given.
+    """
+    environ = dict(environ)
+    value = environ.get("NGFRAC_THREADS", "").strip()
+    threads = int(value) if value.isdigit() and int(value) >= 1 else 1
+    workers = min(4, usable_cores() // threads)
+    chosen = any(a == "-n" or a.startswith("-n") or a.startswith("--numprocesses")
+                 or "no:xdist" in a for a in pytest_args)
+    if workers < 2 or chosen:
+        return pytest_args, environ
+    environ["NGFRAC_THREADS"] = str(threads)
+    print(f"pytest on {workers} workers, {threads} NGSolve thread(s) each "
+          "(NGFRAC_THREADS=2 runs one process with two)", flush=True)
+    return ["-n", str(workers), "--dist", "loadfile", *pytest_args], environ
+
+
 def main(argv: list[str]) -> int:
     if not argv or argv[0] not in ("demo", "test", "docs"):
         print("usage: python3 dev.py demo | test [pytest arguments] "
@@ -69,7 +102,9 @@ def main(argv: list[str]) -> int:
         command = [python, "-m", "sphinx", "-b", "html", "docs", "docs/_build/html", *argv[1:]]
         print("building the docs into docs/_build/html (open index.html)", flush=True)
     else:
-        command = [python, "-m", "pytest", *argv[1:]]
+        arguments, environ = test_workers(argv[1:], dict(os.environ))
+        return subprocess.run([python, "-m", "pytest", *arguments], cwd=ROOT,
+                              env=environ).returncode
     return subprocess.run(command, cwd=ROOT).returncode
 
 
