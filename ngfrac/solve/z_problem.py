@@ -89,7 +89,7 @@ class PhaseFieldProblem:
                                   else ngs.LinearForm(unit_source * dx))
         self.rhs = fields.z.vec.CreateVector()
         """The right-hand side of the last sub-step."""
-        self._ones = None if context.comm.distributed else _constant_one(fields.fes_z)
+        self._ones = None if context.comm.distributed else _constant_one(fields.fes_z, fields.z.vec)
         self._inverse: Any = None
         self._obstacle = NodalObstacle(fields.nodes) if update == "obstacle" else None
         self._distributed: DistributedSystem | None = None
@@ -243,10 +243,11 @@ class PhaseFieldProblem:
         return old + theta * direction_nodes
 
 
-def _constant_one(fes: ngs.FESpace) -> ngs.BaseVector:
-    """The coefficients of the constant 1 in a scalar H1 space: 1 at the vertex dofs (the
-    barycentric hat functions, which sum to one), 0 at the higher-order ones."""
-    ones = ngs.GridFunction(fes).vec
+def _constant_one(fes: ngs.FESpace, like: ngs.BaseVector) -> ngs.BaseVector:
+    """The coefficients of the constant 1 in a scalar H1 space (a vector like ``like``): 1 at
+    the vertex dofs (the barycentric hat functions, which sum to one), 0 at the higher-order
+    ones."""
+    ones = like.CreateVector()
     values = ones.FV().NumPy()
     values[:] = 0.0
     mesh = fes.mesh
