@@ -69,8 +69,8 @@ def test_workers(pytest_args: list[str], environ: dict[str, str]) -> tuple[list[
     """pytest's arguments and environment for a test run that uses every core.
 
     NGFRAC_THREADS is the NGSolve threads of each test process: unset or 1 runs one pytest
-    worker per core (pytest-xdist, ``-n N --dist loadfile``: a file's tests and its fixtures
-    stay in one worker) with one thread each; a larger value runs one process with that many
+    worker per core, at most four (pytest-xdist, ``-n N --dist loadfile``: a file's tests and
+    its fixtures stay in one worker) with one thread each; a larger value runs one process with that many
     threads, as before (a second process beside it would oversubscribe the cores, and
     NGSolve's idle threads spin). ``-n`` or ``-p no:xdist`` among the arguments is left as
     given.
@@ -79,8 +79,7 @@ def test_workers(pytest_args: list[str], environ: dict[str, str]) -> tuple[list[
     value = environ.get("NGFRAC_THREADS", "").strip()
     threads = int(value) if value.isdigit() and int(value) >= 1 else 1
     workers = min(4, usable_cores() // threads)
-    chosen = any(a == "-n" or a.startswith("-n") or a.startswith("--numprocesses")
-                 or "no:xdist" in a for a in pytest_args)
+    chosen = any(a.startswith(("-n", "--numprocesses")) or "no:xdist" in a for a in pytest_args)
     if workers < 2 or chosen:
         return pytest_args, environ
     environ["NGFRAC_THREADS"] = str(threads)
