@@ -174,19 +174,22 @@ class MeshAdapter:
     def element_sizes(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z: ngs.GridFunction,
                       eta: np.ndarray, tip: np.ndarray | None) -> np.ndarray:
         """Requested size per element of ``mesh``: equidistribution of ``eta``, then the
-        crack's band, core and tip sizes (numpy on arrays cached per mesh)."""
+        crack's band and core sizes (``size_field = "bands"``) and the tip's (numpy on arrays
+        cached per mesh)."""
         s = self.sizes
         sizes = size_field_from_indicator(mesh, eta, target_h=s.h_crack, hmin=s.hmin, hmax=s.hmax,
                                           order=z.space.globalorder)
         z_values = nodes.values(z)
         geom, zmax = self._element_node_max(mesh, nodes, z_values)
-        np.minimum(sizes, np.where(zmax >= BAND_LEVEL, s.h_band, np.inf), out=sizes)
-        np.minimum(sizes, np.where(zmax >= CORE_LEVEL, s.h_crack, np.inf), out=sizes)
+        bands = self.settings.size_field == "bands"
+        if bands:
+            np.minimum(sizes, np.where(zmax >= BAND_LEVEL, s.h_band, np.inf), out=sizes)
+            np.minimum(sizes, np.where(zmax >= CORE_LEVEL, s.h_crack, np.inf), out=sizes)
         if tip is not None:
             # |c - tip| - r_T is a lower bound of the distance from the tip to T
             near = np.linalg.norm(geom.centroids - tip[: geom.dim], axis=1) - geom.radii <= s.tip_margin
             np.minimum(sizes, np.where(near, s.h_tip, np.inf), out=sizes)
-            if s.lane_length > 0:
+            if bands and s.lane_length > 0:
                 lane = self._lane(geom, nodes, z_values, tip)
                 np.minimum(sizes, np.where(lane, s.h_crack, np.inf), out=sizes)
         return np.maximum(sizes, s.hmin)
@@ -285,7 +288,8 @@ class MeshAdapter:
         # per-dimension constants (is hmin a checked floor?): ngfrac.mesh.remesh.MeshingConstants
         new = adapt_mesh(mesh, self.geometry, sizes, hmax=self.sizes.hmax,
                          max_vertices=self.settings.max_vertices, density=self.density,
-                         hmin=self.sizes.hmin, floor=self.floor)
+                         hmin=self.sizes.hmin, floor=self.floor,
+                         keep_finest=self.settings.size_field == "bands")
         done = time.perf_counter()
         return new, {"estimate_s": estimated - started, "mark_s": marked - estimated,
                      "remesh_s": done - marked}

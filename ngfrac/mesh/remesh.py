@@ -413,10 +413,16 @@ def predict_vertices(sizes: np.ndarray, weights: np.ndarray, *, density: float =
 
 def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *, hmax: float,
                  density: float = VERTEX_DENSITY, dim: int = 2,
-                 grade: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+                 grade: Callable[[np.ndarray], np.ndarray] | None = None,
+                 keep_finest: bool = True) -> np.ndarray:
     """Coarsen a size field until its predicted vertex count is <= ``max_vertices``.
 
-    The finest sizes (largest errors) are kept longest. Stage 1 raises the coarse part only::
+    With ``keep_finest = False`` the whole field is scaled, ``min(s h, max(hmax, s min h))``
+    with the least s >= 1 that fits: the field's shape (an equidistribution's) is kept and
+    every size grows by the same factor (up to hmax).
+
+    With ``keep_finest`` (the default) the finest sizes (largest errors) are kept longest.
+    Stage 1 raises the coarse part only::
 
         h_lam = min(hmax, h_lo * (h / h_lo)^(1 + lam)),   h_lo = min h,
 
@@ -438,6 +444,8 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
     grade : callable, optional
         Applied to each candidate before predicting (e.g. :func:`element_grader`), since
         Netgen will grade the field anyway.
+    keep_finest : bool
+        Coarsen the coarse part first (stages 1 and 2), or scale the whole field.
 
     Returns
     -------
@@ -454,6 +462,14 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
     if count(sizes) <= max_vertices:
         return grade(sizes)
     h_lo = float(sizes.min())
+    if not keep_finest:
+        def scaled(factor: float) -> np.ndarray:
+            return np.minimum(factor * sizes, max(hmax, factor * h_lo))
+
+        factor = _bisect(lambda t: count(scaled(t)) <= max_vertices, 1.0,
+                         _fitting_factor(count, scaled, max_vertices))
+        log.info("vertex cap: every size grew by %.3g (h_lo %.3g -> %.3g)", factor, h_lo, factor * h_lo)
+        return grade(scaled(factor))
 
     def stage1(lam: float) -> np.ndarray:
         return np.minimum(hmax, h_lo * (sizes / h_lo) ** (1.0 + lam))
@@ -464,15 +480,22 @@ def cap_vertices(sizes: np.ndarray, weights: np.ndarray, max_vertices: float, *,
         log.info("vertex cap: coarse part raised (lambda=%.3g), finest h=%.3g kept", lam, h_lo)
         return grade(stage1(lam))
     base = stage1(lam_max)
-    s_max = 2.0
-    while count(s_max * base) > max_vertices:
-        s_max *= 2.0
-        if s_max > 1e6:
-            raise ValueError(f"max_vertices={max_vertices} cannot be met by any size field")
-    s = _bisect(lambda t: count(t * base) <= max_vertices, 1.0, s_max)
+    s = _bisect(lambda t: count(t * base) <= max_vertices, 1.0,
+                _fitting_factor(count, lambda t: t * base, max_vertices))
     log.info("vertex cap: the finest sizes had to grow by %.3g (h_lo %.3g -> %.3g)",
                 s, h_lo, s * h_lo)
     return grade(s * base)
+
+
+def _fitting_factor(count: Callable[[np.ndarray], float], field: Callable[[float], np.ndarray],
+                    max_vertices: float) -> float:
+    """A power of two t >= 2 with ``count(field(t)) <= max_vertices``."""
+    t = 2.0
+    while count(field(t)) > max_vertices:
+        t *= 2.0
+        if t > 1e6:
+            raise ValueError(f"max_vertices={max_vertices} cannot be met by any size field")
+    return t
 
 
 def _bisect(fits: Callable[[float], bool], lo: float, hi: float, rtol: float = 1e-3) -> float:
@@ -640,7 +663,8 @@ def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray
 
 # -- the adaptive path ---------------------------------------------------------------------------
 def _element_proposal(geom: ElementGeometry, grade: Callable[[np.ndarray], np.ndarray],
-                      requested: np.ndarray, hmax: float, constants: MeshingConstants) -> Proposal:
+                      requested: np.ndarray, hmax: float, constants: MeshingConstants,
+                      keep_finest: bool = True) -> Proposal:
     """The fields of the remesh attempts for element sizes: the graded element field capped
     and sampled; after a mesh over the cap either that again with a tighter cap
     (``constants.recap_graded``) or the sampled field capped as it is."""
@@ -650,12 +674,13 @@ def _element_proposal(geom: ElementGeometry, grade: Callable[[np.ndarray], np.nd
         nonlocal field
         if field is None or constants.recap_graded:
             capped = cap_vertices(requested, geom.measures, allowed, hmax=hmax, density=c,
-                                  dim=geom.dim, grade=grade)
+                                  dim=geom.dim, grade=grade, keep_finest=keep_finest)
             field = sample_elements(geom, capped)
             if constants.recap_graded:
                 return field.points, field.sizes, predict_vertices(capped, geom.measures,
                                                                    density=1.0, dim=geom.dim)
-        sent = cap_vertices(field.sizes, field.weights, allowed, hmax=hmax, density=c, dim=geom.dim)
+        sent = cap_vertices(field.sizes, field.weights, allowed, hmax=hmax, density=c, dim=geom.dim,
+                            keep_finest=keep_finest)
         return field.points, sent, predict_vertices(sent, field.weights, density=1.0, dim=geom.dim)
 
     return propose
@@ -665,7 +690,7 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
                hmax: float, max_vertices: int, grading: float = NETGEN_GRADING,
                density: VertexDensity | None = None, hmin: float | None = None,
                floor: SizeFloor | None = None, max_attempts: int = 4,
-               cap_attempts: int = 8) -> ngs.Mesh:
+               cap_attempts: int = 8, keep_finest: bool = True) -> ngs.Mesh:
     """Grade, cap, sample and remesh: the new mesh (2D or 3D) for element sizes on ``mesh``.
 
     The cap is applied on the elements, with grading inside the prediction (a steep field
@@ -691,6 +716,8 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
         The run's learned ratio (see :class:`SizeFloor`); updated with every checked mesh.
     cap_attempts : int
         Netgen runs per mesh before giving up on the vertex cap (:class:`MeshingError`).
+    keep_finest : bool
+        How the cap coarsens (:func:`cap_vertices`): the coarse part first, or every size alike.
     """
     geom = ElementGeometry.of(mesh)
     constants = meshing_constants(geom.dim)
@@ -706,7 +733,7 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
         if hmin is not None:
             lowest = floor.floor(hmin) if checked else hmin
             floored = np.maximum(requested, constants.floor_factor * lowest)
-        propose = _element_proposal(geom, grade, floored, hmax, constants)
+        propose = _element_proposal(geom, grade, floored, hmax, constants, keep_finest)
         new = _generate_under_cap(ngeo, propose, hmax=hmax, max_vertices=max_vertices,
                                   density=learned, constants=constants, grading=grading,
                                   optimize_steps=None, max_attempts=cap_attempts)

@@ -807,6 +807,10 @@ class Output(_Section):
                  "must be >= 0 (0 = never)")
 
 
+SIZE_FIELDS = ("bands", "equidistributed")
+"""Values of ``adaptivity.size_field``."""
+
+
 @dataclass(frozen=True)
 class Adaptivity(_Section):
     """Mesh adaptation driven by an a-posteriori estimator on z (refinement and coarsening).
@@ -820,6 +824,13 @@ class Adaptivity(_Section):
     z-sub-step at the transferred u restores the open crack (kept where z >= 1/2 and the
     sub-step gives z >= 0.95, outside the tip disc), which interpolation at the new nodes
     lowers where they miss its ridge, so force curves do not jump after a mesh change.
+
+    ``size_field`` says where the sizes come from: ``"bands"`` (the default) equidistributes
+    the estimator and then asks for h_crack in the core, h_band in the band and the tip lane,
+    and under the cap coarsens the coarsest parts first; ``"equidistributed"`` keeps only the
+    estimator's equidistribution and the tip disc, and under the cap scales every size alike
+    (more accurate per second at caps of 2,000 and more on the Fig. 2 scene, less at 1,000-1,350;
+    docs/benchmarks.md, section 11).
     """
 
     SECTION: ClassVar[str] = "adaptivity"
@@ -835,11 +846,14 @@ class Adaptivity(_Section):
     tip_margin: float = 0.0
     tip_lane: bool = True
     relax_core: bool = False
+    size_field: str = "bands"
 
     def validate(self) -> None:
         s = self.SECTION
         _require(self.estimator in ("zz", "residual"), s, "estimator", self.estimator,
                  "choose 'zz' or 'residual'")
+        _require(self.size_field in SIZE_FIELDS, s, "size_field", self.size_field,
+                 "choose 'bands' or 'equidistributed'")
         _require(self.every >= 1, s, "every", self.every, "must be >= 1 (steps between checks)")
         _require(self.max_vertices >= 100, s, "max_vertices", self.max_vertices, "must be >= 100")
         _require(self.hmin > 0, s, "hmin", self.hmin, "must be > 0")

@@ -79,6 +79,21 @@ def test_without_the_lane_ahead_of_the_tip_is_the_disc_size(slit_state):
     assert at_ahead == pytest.approx(sizes.h_band)
 
 
+def test_equidistributed_size_field_has_no_band_core_or_lane_sizes(slit_state):
+    """``size_field = "equidistributed"``: with a zero estimator every element asks for hmax
+    except the tip disc (h_tip); "bands" asks for h_band and h_crack along the slit."""
+    scene, mesh, nodes, z = slit_state
+    on_slit, in_band, ahead = (0.25, 0.5), (0.25, 0.5 + EPS), (0.5 + 2.5 * EPS, 0.5)
+    far = (0.25, 0.1)
+    bands = _sizes_at(scene, mesh, nodes, z, [on_slit, in_band, ahead, far])[1]
+    equi = quick_slit("adaptivity.enabled=true", "adaptivity.size_field=equidistributed")
+    sizes, values = _sizes_at(equi, mesh, nodes, z, [on_slit, in_band, ahead, far])
+    assert values[0] == values[1] == values[3] == pytest.approx(sizes.hmax)
+    assert values[2] == pytest.approx(sizes.h_tip)  # the disc, not the lane's h_crack
+    assert bands[0] == pytest.approx(sizes.h_crack) and bands[1] == pytest.approx(sizes.h_band)
+    assert bands[2] == pytest.approx(sizes.h_crack)
+
+
 def test_tip_stops_being_chased_once_it_reached_the_boundary(slit_state):
     scene, mesh, nodes, z = slit_state
     adapter = MeshAdapter(scene)

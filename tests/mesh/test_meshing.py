@@ -109,6 +109,26 @@ def test_cap_vertices_keeps_the_finest_sizes():
     assert np.array_equal(cap_vertices(sizes, weights, 2 * wanted, hmax=HMAX), sizes)
 
 
+def test_cap_vertices_scaling_keeps_the_shape_of_the_field():
+    """keep_finest=False (``adaptivity.size_field = "equidistributed"``): every size grows by
+    the same factor (up to hmax), the least one whose prediction fits."""
+    rng = np.random.default_rng(2)
+    sizes = np.exp(rng.uniform(np.log(1e-3), np.log(HMAX), 2000))
+    weights = np.full(2000, 1.0 / 2000)
+    wanted = predict_vertices(sizes, weights)
+    for cap in (wanted / 3, wanted / 100):
+        capped = cap_vertices(sizes, weights, cap, hmax=HMAX, keep_finest=False)
+        factor = capped.min() / sizes.min()
+        below = capped < HMAX * (1 - 1e-12)
+        assert factor > 1
+        assert np.allclose(capped[below], factor * sizes[below], rtol=1e-12)
+        assert np.all(capped[~below] == pytest.approx(HMAX))
+        assert predict_vertices(capped, weights) <= cap * (1 + 1e-9)
+        # the least factor (bisection to 0.1 %): 0.2 % less would not fit
+        assert predict_vertices(np.minimum(factor / 1.002 * sizes, HMAX), weights) > cap
+    assert np.array_equal(cap_vertices(sizes, weights, 2 * wanted, hmax=HMAX, keep_finest=False), sizes)
+
+
 @pytest.mark.xfail(strict=True, reason=(
     "known defect (issue #13): when the finest sizes alone exceed the cap, stage 2 of "
     "cap_vertices scales the {h_lo, hmax} field of stage 1 at lambda = 8, so a region asked for "

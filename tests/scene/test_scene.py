@@ -76,6 +76,12 @@ def test_epsilon_not_positive(value):
     bad(data, r"phase_field.epsilon = .* must be > 0")
 
 
+def test_unknown_size_field():
+    data = demo_data()
+    data["adaptivity"]["size_field"] = "metric"
+    bad(data, r"adaptivity.size_field = 'metric' .*choose 'bands' or 'equidistributed'")
+
+
 def test_gamma_negative_constant():
     data = demo_data()
     data["material"]["gamma"] = -1.0
