@@ -2,6 +2,7 @@
 
     NGFRAC_THREADS=1 python benchmarks/freefem_side_by_side.py [--preset quick|full]
         [--caps 1350 2600 ...] [--set key=value ...] [--out DIR] [--fresh-reference]
+        [--tools FreeFEM ngfrac] [--ngfrac-set key=value ...] [--freefem-isotropic]
 
 FreeFEM runs ``benchmarks/freefem/phasefield.edp``, the paper's eq. 7 written for it (mode III,
 P2 for u and z, z = min(1, max(zt, z_old)) at the P2 dofs, ``adaptmesh`` on z every step with
@@ -138,9 +139,11 @@ def freefem_command() -> list[str] | None:
 
 
 # -- the two tools ----------------------------------------------------------------------------
-def run_freefem(command: list[str], scene, out_csv: Path) -> tuple[dict[str, np.ndarray], float, float]:
+def run_freefem(command: list[str], scene, out_csv: Path,
+                isotropic: bool = False) -> tuple[dict[str, np.ndarray], float, float]:
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-    args = [*command, str(EDP), *freefem_arguments(scene), "-out", str(out_csv)]
+    args = [*command, str(EDP), *freefem_arguments(scene), "-out", str(out_csv),
+            "-iso", "1" if isotropic else "0"]
     cpu0, wall0 = cpu_seconds(resource.RUSAGE_CHILDREN), time.perf_counter()
     done = subprocess.run(args, env=env, capture_output=True, text=True)
     wall, cpu = time.perf_counter() - wall0, cpu_seconds(resource.RUSAGE_CHILDREN) - cpu0
@@ -290,6 +293,13 @@ def main() -> None:
     parser.add_argument("--fresh-reference", action="store_true")
     parser.add_argument("--tools", nargs="+", choices=("FreeFEM", "ngfrac"), default=["FreeFEM", "ngfrac"],
                         help="run only these (ngfrac alone: the monotonicity over caps, no FreeFEM needed)")
+    parser.add_argument("--ngfrac-set", dest="ngfrac_overrides", action="append", default=[],
+                        metavar="KEY=VALUE",
+                        help="an override for the compared ngfrac runs only (not the reference, not "
+                             "FreeFEM), e.g. adaptivity.size_field=equidistributed")
+    parser.add_argument("--freefem-isotropic", action="store_true",
+                        help="FreeFEM's adaptmesh with an isotropic metric (iso = true), as Netgen's "
+                             "meshes are: how much of FreeFEM's accuracy per vertex is anisotropy")
     args = parser.parse_args()
 
     command = freefem_command() if "FreeFEM" in args.tools else []
@@ -323,7 +333,8 @@ def main() -> None:
         for tool in [t for t in ("FreeFEM", "ngfrac") if t in args.tools]:
             print(f"{tool} cap {cap} ...", flush=True)
             if tool == "FreeFEM":
-                data, cpu, wall = run_freefem(command, scene, out / f"freefem_cap{cap}.csv")
+                data, cpu, wall = run_freefem(command, scene, out / f"freefem_cap{cap}.csv",
+                                              args.freefem_isotropic)
                 notes.append(f"FreeFEM cap {cap}: z in [{np.min(data['zmin']):.3g}, {np.max(data['zmax']):.6g}], "
                              f"smallest z^k - z^(k-1) on a step's mesh {np.min(data['dzmin'][1:]):.3g}, "
                              f"at most {int(np.max(data['nv']))} vertices, {int(np.sum(data['tries'] > 1))} "
@@ -331,7 +342,8 @@ def main() -> None:
                              f"{-np.sum(np.minimum(data['dL_transfer'], 0)):.4f} in all, at most "
                              f"{-np.min(data['dL_transfer']):.2e} in one step")
             else:
-                data, cpu, wall = run_ngfrac(scene)
+                data, cpu, wall = run_ngfrac(load_scene(args.scene, common + args.ngfrac_overrides
+                                                        + [f"adaptivity.max_vertices={cap}"]))
                 np.savetxt(out / f"ngfrac_cap{cap}.csv", np.column_stack([data[k] for k in data]),
                            delimiter=",", header=",".join(data), comments="")
             errors = length_errors(data, ref, ph)
@@ -345,7 +357,9 @@ def main() -> None:
              f"hmin {base.adaptivity.hmin / 2:g} (at most {int(np.max(ref['nv']))} vertices). "
              f"Phases from the reference: growth from t = {_t(ph.t_grow)}, separation at t = {_t(ph.t_sep)}. "
              f"L(0): the crack length of z0 (for a slit from an edge exactly l + pi eps/4 = "
-             f"{slit_length + math.pi * eps / 4:.4f}).",
+             f"{slit_length + math.pi * eps / 4:.4f})."
+             + (" FreeFEM's metric isotropic (adaptmesh iso = true)." if args.freefem_isotropic else "")
+             + (f" ngfrac runs with {' '.join(args.ngfrac_overrides)}." if args.ngfrac_overrides else ""),
              "",
              "| tool | cap | mean nv | CPU s | wall s | L(0) | L err max | L err mean | before growth | "
              "propagation | after separation | t tip at x = mid | t tip at far edge |",
