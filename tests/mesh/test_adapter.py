@@ -44,8 +44,9 @@ def test_crack_direction_is_unknown_without_a_crack_behind_the_tip():
 
 @pytest.fixture(scope="module")
 def slit_state():
-    """The quick slit scene, adaptive, on a uniform mesh with z0 of the slit (P2 z)."""
-    scene = quick_slit("adaptivity.enabled=true")
+    """The quick slit scene, adaptive with the "bands" size field, on a uniform mesh with z0 of
+    the slit (P2 z)."""
+    scene = quick_slit("adaptivity.enabled=true", "adaptivity.size_field=bands")
     mesh = build_mesh(scene.geometry, 0.01, [c.points for c in scene.cracks])
     fes = ngs.H1(mesh, order=2)
     z, nodes = ngs.GridFunction(fes), LagrangeNodes(fes)
@@ -73,7 +74,8 @@ def test_lane_asks_for_h_crack_ahead_of_the_tip_and_not_beside_it(slit_state):
 
 def test_without_the_lane_ahead_of_the_tip_is_the_disc_size(slit_state):
     scene, mesh, nodes, z = slit_state
-    no_lane = quick_slit("adaptivity.enabled=true", "adaptivity.tip_lane=false")
+    no_lane = quick_slit("adaptivity.enabled=true", "adaptivity.size_field=bands",
+                         "adaptivity.tip_lane=false")
     sizes, (at_ahead,) = _sizes_at(no_lane, mesh, nodes, z, [(0.5 + 2.5 * EPS, 0.5)])
     assert sizes.lane_length == 0
     assert at_ahead == pytest.approx(sizes.h_band)
@@ -134,9 +136,11 @@ def test_a_tip_that_reaches_the_boundary_between_changes_asks_for_one_last_mesh(
 def test_no_element_is_smaller_than_hmin_in_an_adaptive_run():
     # hmin = h_crack = eps/10, so the floor binds in the core along the whole crack; asked
     # for nothing below hmin, Netgen used to deliver 0.81-0.86 hmin there (SizeFloor).
-    # history's hmin column is the smallest longest edge of the step's mesh.
+    # history's hmin column is the smallest longest edge of the step's mesh. (The "bands"
+    # size field asks for hmin in the whole core.)
     hmin = EPS / 10
-    scene = quick_slit("adaptivity.enabled=true", f"adaptivity.hmin={hmin}", "time.dt=2e-3",
+    scene = quick_slit("adaptivity.enabled=true", "adaptivity.size_field=bands",
+                       f"adaptivity.hmin={hmin}", "time.dt=2e-3",
                        "time.t_end=0.1", "adaptivity.max_vertices=3000")
     stepper = PhaseFieldStepper(scene)
     smallest = [r.hmin for r in stepper.run()]

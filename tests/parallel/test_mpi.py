@@ -37,7 +37,8 @@ PLANE_STRAIN = ("demos/mode12_kink.toml",
                  "time.dt=0.01", "time.t_end=0.1", "output.vtk_every=5"])
 MODE3_ADAPTIVE = ("demos/mode3_slit.toml",
                   ["phase_field.epsilon=0.05", "time.dt=0.02", "time.t_end=0.18",
-                   "adaptivity.max_vertices=1500", "adaptivity.hmin=0.005", "output.vtk_every=0"])
+                   "adaptivity.max_vertices=1500", "adaptivity.hmin=0.005", "output.vtk_every=0",
+                   "adaptivity.size_field=bands"])
 """Grows the slit from x = 0.3 to a tip near x = 0.59 in 9 steps: 3 initial meshes, then mesh
 changes after steps 7 and 9 (1,379 -> 1,440 -> 1,301 vertices)."""
 BOX3D = ("demos/box3d.toml",
