@@ -828,9 +828,8 @@ class Adaptivity(_Section):
     ``size_field`` says where the sizes come from: ``"bands"`` (the default) equidistributes
     the estimator and then asks for h_crack in the core, h_band in the band and the tip lane,
     and under the cap coarsens the coarsest parts first; ``"equidistributed"`` keeps only the
-    estimator's equidistribution and the tip disc, and under the cap scales every size alike
-    (more accurate per second at caps of 2,000 and more on the Fig. 2 scene, less at 1,000-1,350;
-    docs/benchmarks.md, section 11).
+    estimator's equidistribution (on size levels) and the tip disc, and under the cap scales
+    every size alike (the Fig. 2 demo's setting; docs/benchmarks.md, section 11, compares them).
     """
 
     SECTION: ClassVar[str] = "adaptivity"
