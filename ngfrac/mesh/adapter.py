@@ -47,7 +47,6 @@ LANE_SPREAD = 0.27
 """The tip lane widens by this much per unit length ahead of the tip (tan 15 deg)."""
 
 
-
 SIZE_LEVELS_PER_OCTAVE = 4
 """An equidistributed size field is rounded down to hmin * 2**(k / 4) (:func:`quantized`)."""
 
@@ -57,9 +56,9 @@ def quantized(sizes: np.ndarray, base: float, top: float) -> np.ndarray:
     of at least ``top`` (hmax) stay ``top``.
 
     An equidistributed field is a continuous function of z, and Netgen's mesh is not a
-    continuous function of its sizes: z's last bits (a CG solve of an MPI run against the serial
-    direct one, the summation order of two threads) changed the meshes of the same run. On
-    levels a size changes only where z moves it across one; at most 19 % finer than asked.
+    continuous function of its sizes: z's last digits (an MPI run's CG u-solve against the
+    serial direct one) changed the meshes of the same run. On levels a size changes only where
+    z moves it across one; it is at most 19 % finer than asked.
     """
     levels = np.floor(SIZE_LEVELS_PER_OCTAVE * np.log2(np.maximum(sizes, base) / base) + 1e-9)
     return np.where(sizes >= top, top, base * np.exp2(levels / SIZE_LEVELS_PER_OCTAVE))
