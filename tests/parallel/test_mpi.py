@@ -40,7 +40,8 @@ MODE3_ADAPTIVE = ("demos/mode3_slit.toml",
                    "adaptivity.max_vertices=1500", "adaptivity.hmin=0.005", "output.vtk_every=0",
                    "adaptivity.size_field=bands"])
 """Grows the slit from x = 0.3 to a tip near x = 0.59 in 9 steps: 3 initial meshes, then mesh
-changes after steps 7 and 9 (1,379 -> 1,440 -> 1,301 vertices)."""
+changes after steps 7 and 9 (1,379 -> 1,440 -> 1,301 vertices), with the "bands" size field
+(the demo's "equidistributed" one makes a third change)."""
 BOX3D = ("demos/box3d.toml",
          ["time.adaptive=false", "time.dt=0.4", "time.t_end=2.4", "adaptivity.max_vertices=1000",
           "output.vtk_every=0"])
