@@ -305,13 +305,27 @@ class PhaseFieldStepper:
             self.ticks += n
             self.k += 1
             self.control.accepted(self.ticks, dz_max)
+        # the step's diagnostics on the mesh it was solved on: after a mesh change u is only
+        # interpolated (not in equilibrium there), and its energy would jump for one row
+        diagnostics = self._diagnostics() if diagnose else {}
         adapt_s = self._adapt_if_wanted(new)
-        return self.record(diagnose, dz_max=dz_max, z_iterations=iterations, dt=n * dt,
-                           step_s=time.perf_counter() - started, solve_s=solve_s, adapt_s=adapt_s)
+        return self.record(diagnose, diagnostics, dz_max=dz_max, z_iterations=iterations,
+                           dt=n * dt, step_s=time.perf_counter() - started, solve_s=solve_s,
+                           adapt_s=adapt_s)
 
-    def record(self, diagnose: bool = True, **step: Any) -> StepRecord:
-        """A record of the current state (diagnostics only when asked for); ``step`` holds
-        the per-step columns (dz_max, z_iterations, dt, step_s, solve_s, adapt_s)."""
+    def record(self, diagnose: bool = True, diagnostics: dict[str, Any] | None = None,
+               **step: Any) -> StepRecord:
+        """A record of the current state; ``step`` holds the per-step columns (dz_max,
+        z_iterations, dt, step_s, solve_s, adapt_s).
+
+        Parameters
+        ----------
+        diagnose : bool
+            Fill the diagnostic columns (energies, crack length, tip, reactions); else NaN.
+        diagnostics : dict, optional
+            Those columns as :meth:`step` computed them before a mesh change; by default they
+            are computed now. nv, ndof, hmin and hmax always describe the current mesh.
+        """
         f = self.fields
         nv, ndof = self.comm.counts(f)
         base = dict(step=self.k, t=self.t, wall_s=time.perf_counter() - self.timer.started,
@@ -320,6 +334,15 @@ class PhaseFieldStepper:
                     pressurized=self.scene.phase_field.pressurized, **step)
         if not diagnose:
             return StepRecord(**base)
+        if diagnostics is None:
+            diagnostics = self._diagnostics()
+        hmin, hmax = self.comm.size_range(self.tracker, f)
+        return StepRecord(**base, **diagnostics, hmin=hmin, hmax=hmax)
+
+    def _diagnostics(self) -> dict[str, Any]:
+        """The diagnostic columns of the current fields: reactions (of the last u-solve),
+        energies, crack length, tip and path length, crack volume."""
+        f = self.fields
         pf, body_force = self.scene.phase_field, self.u_problem.body_force
         with self.timer.phase("diagnostics: energies, tip"):
             e = energies(f.mesh, f.z, self.u_problem.elastic_density(), self.gamma,
@@ -330,17 +353,15 @@ class PhaseFieldStepper:
         extra_work = self.u_problem.surface_work()
         if extra_work is not None:
             e = dataclasses.replace(e, work=e.work + extra_work)
-        volume = (crack_volume(f.u, f.z, f.integration_order) if base["pressurized"]
+        volume = (crack_volume(f.u, f.z, f.integration_order) if pf.pressurized
                   else math.nan)
         crack = self.crack()
-        tip, (hmin, hmax) = crack.tip, self.comm.size_range(self.tracker, f)
+        tip = crack.tip
         path_length = self._initial_length + crack.grown_length if f.mesh.dim == 2 else math.nan
-        return StepRecord(**base, forces=dict(self.forces), hmin=hmin, hmax=hmax,
-                          E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
-                          crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
-                          path_length=path_length, n_damage_zones=crack.n_damage_zones,
-                          tip_z=float(tip[2]) if len(tip) > 2 else math.nan,
-                          crack_volume=volume)
+        return dict(forces=dict(self.forces), E_el=e.E_el, E_surf=e.E_surf, E_total=e.E_total,
+                    crack_length=e.crack_length, tip_x=float(tip[0]), tip_y=float(tip[1]),
+                    path_length=path_length, n_damage_zones=crack.n_damage_zones,
+                    tip_z=float(tip[2]) if len(tip) > 2 else math.nan, crack_volume=volume)
 
     def run(self, history_every: int | None = None) -> Iterator[StepRecord]:
         """Step to the end time, yielding one record per step.
