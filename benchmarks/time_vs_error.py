@@ -69,8 +69,9 @@ class Preset:
 
 
 def _uniform(h: float, order: int, order_z: int | None = None) -> list[str]:
+    # fixed steps named: demos/sent.toml sets adaptive ones, which the adaptive runs choose
     return ["adaptivity.enabled=false", f"geometry.mesh_size={h}", f"discretization.order={order}",
-            f"discretization.order_z={order_z or min(order, 2)}"]
+            f"discretization.order_z={order_z or min(order, 2)}", "time.adaptive=false"]
 
 
 def _adaptive(cap: int, adaptive_dt: bool, size_field: str = "bands") -> list[str]:
