@@ -749,7 +749,11 @@ class Discretization(_Section):
     ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the
     default) runs factorizations and solves outside NGSolve's TaskManager so that a run is
     bitwise reproducible with any thread count (:mod:`ngfrac.solve.threads`); ``true``
-    threads them too.
+    threads them too. ``concurrent_substeps = true`` runs the u- and the z-sub-step of a step
+    at the same time, each on one core with one NGSolve thread (with ``coupling = "paper"``
+    they are independent: z uses the previous u); bitwise the same results as one thread,
+    for two cores (docs/benchmarks.md, section 13). Serial on a distributed (MPI) mesh and
+    with a tension/compression split.
     """
 
     SECTION: ClassVar[str] = "discretization"
@@ -760,9 +764,16 @@ class Discretization(_Section):
     coupling: str = "paper"
     z_update: str = "auto"
     threaded_solves: bool = False
+    concurrent_substeps: bool = False
 
     def validate(self) -> None:
         s = self.SECTION
+        _require(not self.concurrent_substeps or self.coupling == "paper", s,
+                 "concurrent_substeps", True, "it needs coupling = 'paper' (with 'staggered' "
+                 "the z-sub-step waits for the new u)")
+        _require(not (self.concurrent_substeps and self.threaded_solves), s,
+                 "concurrent_substeps", True, "threaded_solves = true excludes it (the two "
+                 "sub-steps on one NGSolve thread each, or one after the other on all)")
         _require(1 <= self.order <= 6, s, "order", self.order, "must be an integer in 1..6")
         _require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
                  "must be 1 or 2 (0 = min(order, 2))")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor, wait
 from functools import cached_property
 from typing import Any, Iterator
 
@@ -91,8 +92,10 @@ class PhaseFieldStepper:
         """Time as a count of ``time.dt``: t = ticks * dt, exact for any number of steps."""
         self.control = StepSizeControl(scene.time)
         self.context = StepContext(ngs.Parameter(0.0), ngs.Parameter(1.0 / scene.time.dt),
-                                   ThreadPolicy(scene.discretization.threaded_solves), PhaseTimer(),
-                                   self.comm)
+                                   ThreadPolicy(scene.discretization.threaded_solves,
+                                                concurrent=(scene.discretization.concurrent_substeps
+                                                            and not self.comm.distributed)),
+                                   PhaseTimer(), self.comm)
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
         self.domain: Domain = domain_of(scene.geometry)
         """The domain (:mod:`ngfrac.mesh.domains`)."""
@@ -291,14 +294,17 @@ class PhaseFieldStepper:
                 self.time.Set((self.ticks + n) * dt)
                 self.inv_dt.Set(1.0 / (n * dt))
                 solve_started = time.perf_counter()
-                self.solve_u()
+                iterations = self._solve_both() if self._concurrent else None
+                if iterations is None:
+                    self.solve_u()
                 solve_s += time.perf_counter() - solve_started
                 if diagnose:  # before z changes and before any new mesh: this solve's residual
                     with self.timer.phase("diagnostics: reactions"):
                         self.forces = reaction_columns(self.u_problem, self.scene.loads)
-                solve_started = time.perf_counter()
-                iterations = self.z_problem.solve(self._step_label())
-                solve_s += time.perf_counter() - solve_started
+                if iterations is None:
+                    solve_started = time.perf_counter()
+                    iterations = self.z_problem.solve(self._step_label())
+                    solve_s += time.perf_counter() - solve_started
                 with self.timer.phase("z: bounds at nodes"):
                     old, new = self.z_problem.project()
                 dz_max = self.comm.max(float(np.max(new - old)) if len(new) else 0.0)
@@ -321,6 +327,30 @@ class PhaseFieldStepper:
         return self.record(diagnose, diagnostics, dz_max=dz_max, z_iterations=iterations,
                            dt=n * dt, step_s=time.perf_counter() - started - diagnostics_s,
                            solve_s=solve_s, adapt_s=adapt_s)
+
+    @property
+    def _concurrent(self) -> bool:
+        """Whether the two sub-steps run at the same time (``discretization.concurrent_substeps``;
+        not with a split, whose Newton u-solve enters the TaskManager)."""
+        return self.threads.concurrent and self.u_problem.split is None
+
+    @cached_property
+    def _substeps(self) -> ThreadPoolExecutor:
+        """The thread the z-sub-step runs in while this one solves for u."""
+        return ThreadPoolExecutor(max_workers=1, thread_name_prefix="ngfrac-z")
+
+    def _solve_both(self) -> int:
+        """The u- and the z-sub-step at once; returns the z-solve's iterations. With
+        ``coupling = "paper"`` they share no output: u reads z^{k-1}, which the z-solve leaves
+        as it is (it writes z_trial; :meth:`PhaseFieldProblem.project` comes after both), and
+        z reads u_prev. NGSolve releases the GIL in assembly and factorization."""
+        z_step = self._substeps.submit(self.z_problem.solve, self._step_label())
+        try:
+            self.solve_u()
+        except BaseException:
+            wait([z_step])  # never leave the z-solve running on fields being given up
+            raise
+        return z_step.result()
 
     def record(self, diagnose: bool = True, diagnostics: dict[str, Any] | None = None,
                **step: Any) -> StepRecord:

@@ -66,18 +66,28 @@ class ThreadPolicy:
     """
 
     threaded_solves: bool = False
+    concurrent: bool = False
+    """The u- and z-sub-steps at the same time in two Python threads
+    (``discretization.concurrent_substeps``): the whole step on one NGSolve thread, and no
+    TaskManager inside it (two OS threads must not enter it; NGSolve releases the GIL in
+    assembly and factorization, so the two sub-steps use two cores)."""
 
     def step(self) -> AbstractContextManager:
-        """The context of a whole step: the TaskManager when solves are threaded, else none."""
+        """The context of a whole step: the TaskManager when solves are threaded, one NGSolve
+        thread when the sub-steps run concurrently, else none."""
+        if self.concurrent:
+            return serial()
         return parallel() if self.threaded_solves else nullcontext()
 
     def solves(self) -> AbstractContextManager:
         """The context of factorizations, solves, estimators and remeshing."""
-        return nullcontext() if self.threaded_solves else serial()
+        return nullcontext() if self.threaded_solves or self.concurrent else serial()
 
     def assembly(self, preconditioner: object = None) -> AbstractContextManager:
         """Threads for an assembly, unless it also sets up a registered preconditioner
-        (BDDC factorizes inside the assembly)."""
+        (BDDC factorizes inside the assembly) or the sub-steps run concurrently."""
+        if self.concurrent:
+            return nullcontext()
         return parallel() if preconditioner is None else self.solves()
 
 

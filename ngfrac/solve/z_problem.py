@@ -26,7 +26,6 @@ from ..scene import Scene
 from .context import StepContext
 from .obstacle import NodalObstacle
 from .spaces import MeshFields
-from .threads import parallel
 from .u_problem import SolverError
 
 CG_MAXITER = 2000
@@ -116,7 +115,7 @@ class PhaseFieldProblem:
                 iterations = self._distributed.solve(self.rhs, self.fields.z.vec,
                                                      self.z_trial.vec, step)
             return iterations
-        with self.context.timer.phase("z: assemble"), parallel():
+        with self.context.timer.phase("z: assemble"), self.context.threads.assembly():
             self._assemble_system()
         if self._obstacle is not None:
             with self.context.timer.phase("z: obstacle solve"), self.context.threads.solves():

@@ -82,6 +82,14 @@ def test_unknown_size_field():
     bad(data, r"adaptivity.size_field = 'metric' .*choose 'bands' or 'equidistributed'")
 
 
+def test_concurrent_substeps_need_the_papers_coupling_and_no_threaded_solves():
+    data = demo_data()
+    data.setdefault("discretization", {}).update(concurrent_substeps=True, coupling="staggered")
+    bad(data, r"discretization.concurrent_substeps = True .*needs coupling = 'paper'")
+    data["discretization"].update(coupling="paper", threaded_solves=True)
+    bad(data, r"discretization.concurrent_substeps = True .*threaded_solves = true excludes it")
+
+
 def test_gamma_negative_constant():
     data = demo_data()
     data["material"]["gamma"] = -1.0

@@ -1,5 +1,6 @@
-"""The same scene gives the same bits: an adaptive run, twice with two NGSolve threads and once
-with one, writes identical histories (timing columns aside; ngfrac.solve.threads says why)."""
+"""The same scene gives the same bits: an adaptive run, twice with two NGSolve threads, once
+with one and once with its two sub-steps run concurrently, writes identical histories (timing
+columns aside; ngfrac.solve.threads says why)."""
 from __future__ import annotations
 
 import csv
@@ -20,10 +21,10 @@ OVERRIDES = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "time.dt=4e-
              "output.results=false", "output.checkpoint_every=0"]
 
 
-def run(out: Path, threads: int) -> list[dict[str, str]]:
+def run(out: Path, threads: int, *extra: str) -> list[dict[str, str]]:
     command = [sys.executable, "-m", "ngfrac", "run", str(ROOT / "demos" / "mode3_slit.toml"),
                "--out", str(out), "--no-progress", "--no-plots"]
-    for override in OVERRIDES:
+    for override in [*OVERRIDES, *extra]:
         command += ["--set", override]
     env = dict(os.environ, NGFRAC_THREADS=str(threads))
     result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=900)
@@ -36,16 +37,23 @@ def run(out: Path, threads: int) -> list[dict[str, str]]:
 @pytest.fixture(scope="module")
 def histories(tmp_path_factory):
     base = tmp_path_factory.mktemp("reproducible")
-    return [run(base / f"run{i}_{threads}", threads) for i, threads in enumerate((2, 2, 1))]
+    runs = [run(base / f"run{i}_{threads}", threads) for i, threads in enumerate((2, 2, 1))]
+    return runs + [run(base / "concurrent", 2, "discretization.concurrent_substeps=true")]
 
 
 def test_two_runs_with_two_threads_write_identical_histories(histories):
-    first, second, _ = histories
+    first, second = histories[:2]
     assert int(first[-1]["n_adapt"]) >= 2, "the scene should change its mesh"
     assert float(first[-1]["tip_x"]) > 0.5, "the crack should grow across the mesh changes"
     assert first == second
 
 
 def test_one_thread_gives_the_same_bits_as_two(histories):
-    first, _, single = histories
+    first, _, single = histories[:3]
     assert first == single
+
+
+def test_concurrent_substeps_give_the_same_bits(histories):
+    """u and z solved at the same time in two Python threads (one NGSolve thread each):
+    the same arithmetic in the same order as one after the other."""
+    assert histories[3] == histories[0]
