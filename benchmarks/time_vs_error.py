@@ -264,20 +264,24 @@ def plot(rows: list[dict], path: Path, title: str) -> None:
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4), constrained_layout=True)
     kinds = (("uniform P1", "s", "uniform P1"), ("uniform P2", "o", "uniform P2"),
-             ("uniform P3", "^", "uniform P3 (u) / P2 (z)"), ("adaptive", "*", "adaptive P2"),
-             ("dt-adaptive", "P", "adaptive P2, adaptive time steps"))
+             ("uniform P3", "^", "uniform P3 (u) / P2 (z)"), ("adaptive", "*", "adaptive P2, bands"),
+             ("dt-adaptive", "P", "adaptive P2, bands, adaptive time steps"),
+             ("equidistributed", "D", "adaptive P2, equidistributed"),
+             ("equidistributed dt-adaptive", "X", "adaptive P2, equidistributed, adaptive time steps"))
+
+    def chosen(run: str, kind: str) -> bool:
+        if not kind.startswith(("adaptive", "dt-adaptive", "equidistributed")):
+            return run.startswith(kind)
+        return (run.startswith("adaptive") and ("equidistributed" in run) == kind.startswith("equi")
+                and ("dt-adaptive" in run) == kind.endswith("dt-adaptive"))
+
     for kind, marker, label in kinds:
-        if kind == "adaptive":
-            sel = [r for r in rows if r["run"].startswith("adaptive") and "dt-adaptive" not in r["run"]]
-        elif kind == "dt-adaptive":
-            sel = [r for r in rows if "dt-adaptive" in r["run"]]
-        else:
-            sel = [r for r in rows if r["run"].startswith(kind)]
+        sel = [r for r in rows if chosen(r["run"], kind)]
         if sel:
             ax.loglog([r["wall_s"] for r in sel], [max(r["crack_length_err"], 1e-6) for r in sel],
-                      marker, label=label, ms=8)
-            for r in sel:
-                ax.annotate(r["run"].split(" ", 2)[-1].replace(" dt-adaptive", ""),
+                      marker, label=label, ms=7)
+            for r in sel:  # "h=0.01" or "cap=4000": the legend says the rest
+                ax.annotate(r["run"].replace(" dt-adaptive", "").split()[-1],
                             (r["wall_s"], max(r["crack_length_err"], 1e-6)), fontsize=6,
                             xytext=(4, 2), textcoords="offset points")
     ax.axhline(0.01, color="0.6", lw=0.8, ls="--")
