@@ -344,13 +344,14 @@ class PhaseFieldStepper:
         ``coupling = "paper"`` they share no output: u reads z^{k-1}, which the z-solve leaves
         as it is (it writes z_trial; :meth:`PhaseFieldProblem.project` comes after both), and
         z reads u_prev. NGSolve releases the GIL in assembly and factorization."""
-        z_step = self._substeps.submit(self.z_problem.solve, self._step_label())
-        try:
-            self.solve_u()
-        except BaseException:
-            wait([z_step])  # never leave the z-solve running on fields being given up
-            raise
-        return z_step.result()
+        with self.threads.concurrently():
+            z_step = self._substeps.submit(self.z_problem.solve, self._step_label())
+            try:
+                self.solve_u()
+            except BaseException:
+                wait([z_step])  # never leave the z-solve running on fields being given up
+                raise
+            return z_step.result()
 
     def record(self, diagnose: bool = True, diagnostics: dict[str, Any] | None = None,
                **step: Any) -> StepRecord:

@@ -20,8 +20,9 @@ faster on many cores, not reproducible bitwise.
 from __future__ import annotations
 
 import math
+import threading
 from contextlib import AbstractContextManager, contextmanager, nullcontext
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Iterator
 
 import ngsolve as ngs
@@ -63,30 +64,43 @@ class ThreadPolicy:
 
     Reproducible (the default): assembly in the TaskManager, factorizations, solves,
     estimators and remeshing with one thread. Threaded: the whole step in the TaskManager.
+    Concurrent: as reproducible, but the u- and the z-sub-step run side by side, each on one
+    NGSolve thread (:meth:`concurrently`); the same bits as the default.
     """
 
     threaded_solves: bool = False
     concurrent: bool = False
-    """The u- and z-sub-steps at the same time in two Python threads
-    (``discretization.concurrent_substeps``): the whole step on one NGSolve thread, and no
-    TaskManager inside it (two OS threads must not enter it; NGSolve releases the GIL in
-    assembly and factorization, so the two sub-steps use two cores)."""
+    """Run the u- and z-sub-steps at the same time in two Python threads
+    (``discretization.concurrent_substeps``), inside :meth:`concurrently`."""
+    _section: threading.Event = field(default_factory=threading.Event, compare=False, repr=False)
+
+    @contextmanager
+    def concurrently(self) -> Iterator[None]:
+        """The context of kernels that run in two Python threads at once: one NGSolve thread
+        for the whole of it, and inside it :meth:`solves` and :meth:`assembly` enter nothing
+        (two OS threads must not enter the TaskManager, and ``SetNumThreads`` is global).
+        NGSolve releases the GIL in assembly and factorization, so the two use two cores."""
+        with serial():
+            self._section.set()
+            try:
+                yield
+            finally:
+                self._section.clear()
 
     def step(self) -> AbstractContextManager:
-        """The context of a whole step: the TaskManager when solves are threaded, one NGSolve
-        thread when the sub-steps run concurrently, else none."""
-        if self.concurrent:
-            return serial()
+        """The context of a whole step: the TaskManager when solves are threaded, else none."""
         return parallel() if self.threaded_solves else nullcontext()
 
     def solves(self) -> AbstractContextManager:
         """The context of factorizations, solves, estimators and remeshing."""
-        return nullcontext() if self.threaded_solves or self.concurrent else serial()
+        if self.threaded_solves or self._section.is_set():
+            return nullcontext()
+        return serial()
 
     def assembly(self, preconditioner: object = None) -> AbstractContextManager:
         """Threads for an assembly, unless it also sets up a registered preconditioner
-        (BDDC factorizes inside the assembly) or the sub-steps run concurrently."""
-        if self.concurrent:
+        (BDDC factorizes inside the assembly) or runs beside another (:meth:`concurrently`)."""
+        if self._section.is_set():
             return nullcontext()
         return parallel() if preconditioner is None else self.solves()
 
