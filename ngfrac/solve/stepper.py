@@ -323,7 +323,13 @@ class PhaseFieldStepper:
         diagnosed = time.perf_counter()
         diagnostics = self._diagnostics() if diagnose else {}
         diagnostics_s = time.perf_counter() - diagnosed  # not part of step_s (the profile has it)
+        changes = len(self.adaptations)
         adapt_s = self._adapt_if_wanted(new)
+        if diagnose and len(self.adaptations) > changes:
+            # the tip on the new mesh: the next step's tip is found relative to it
+            # (CrackTracker.previous_tip), as it was when the diagnostics followed the change
+            with self.timer.phase("adapt: crack set"), self.threads.solves():
+                self.crack()
         return self.record(diagnose, diagnostics, dz_max=dz_max, z_iterations=iterations,
                            dt=n * dt, step_s=time.perf_counter() - started - diagnostics_s,
                            solve_s=solve_s, adapt_s=adapt_s)
