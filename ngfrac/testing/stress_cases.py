@@ -136,6 +136,8 @@ class StabilityMonitor:
         self._sample = self.sampler(self.stepper.scene)
         self._previous = self.stepper.record()
         self._values = self._check_state(self._previous)
+        self._solved_on = self._previous.n_adapt
+        """The mesh (count of changes) the previous row's energies were computed on."""
         self.records.append(self._previous)
 
     def _check_state(self, record) -> np.ndarray:
@@ -153,8 +155,12 @@ class StabilityMonitor:
         same_mesh = record.n_adapt == previous.n_adapt and len(values) == len(self._values)
         if same_mesh:
             self.z_decrease = max(self.z_decrease, float(np.max(self._values - values)))
+        # a row's energies are of its step's solution on the mesh it was solved on, the mesh
+        # of the row before (a step that ends with a mesh change reports them before it)
+        same_energy_mesh = previous.n_adapt == self._solved_on
+        self._solved_on = previous.n_adapt
         held = np.array_equal(self._sample(previous.t), self._sample(record.t))
-        if same_mesh and held and record.has_diagnostics and previous.has_diagnostics:
+        if same_energy_mesh and held and record.has_diagnostics and previous.has_diagnostics:
             self.held_steps += 1
             rise = (record.E_total - previous.E_total) / max(abs(previous.E_total), 1e-300)
             self.energy_rise = max(self.energy_rise, rise)
