@@ -28,11 +28,12 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import INITIAL_PASSES, Adaptation, MeshAdapter
-from ..physics.elastic import make_model
-from ..solve.spaces import MeshFields
+from ..scene.build import crack_model_of, elastic_model_of
+from ..mesh.fields import MeshFields
 
 if TYPE_CHECKING:
     from ..scene import Scene
+    from ..physics.crack_models import CrackModel
     from .communicator import MPICommunicator
 
 __all__ = ["DistributedMeshAdapter", "MeshChangeCost", "SerialCopy", "node_dofs"]
@@ -92,7 +93,7 @@ def node_dofs(fes: ngs.FESpace) -> tuple[np.ndarray, np.ndarray]:
 def _blocked_layout(fes: ngs.FESpace, samples: int = 25) -> tuple[np.ndarray, np.ndarray] | None:
     """NGSolve's layout of H1 and VectorH1 of order 1 or 2, or None when ``fes`` has
     another: per component the vertex dofs in vertex order, then the edge dofs in edge order
-    (as :class:`~ngfrac.solve.nodal.LagrangeNodes` assumes), the components one after the
+    (as :class:`~ngfrac.fem.nodal.LagrangeNodes` assumes), the components one after the
     other. Checked with ``GetDofNrs`` at ``samples`` vertices and edges (a loop over every
     node costs 0.1-0.3 s per space at 5,000 vertices)."""
     mesh = fes.mesh
@@ -226,7 +227,8 @@ class SerialCopy:
     def __init__(self, scene: "Scene", comm: "MPICommunicator") -> None:
         self.scene = scene
         self.comm = comm
-        self.model = make_model(scene)
+        self.model = elastic_model_of(scene)
+        self.crack_model = crack_model_of(scene)
         self.fields: MeshFields | None = None
         """This rank's fields of the last gather or scatter."""
         self._mesh: ngs.Mesh | None = None
@@ -245,7 +247,7 @@ class SerialCopy:
 
     def serial_fields(self, mesh: ngs.Mesh) -> MeshFields:
         """Zero serial fields of the scene on ``mesh`` (rank 0's)."""
-        return MeshFields.on(mesh, self.scene, self.model)
+        return MeshFields.on(mesh, self.scene, self.model, self.crack_model)
 
     def attach(self, fields: MeshFields) -> None:
         """Match ``fields`` (this rank's, on the current distributed mesh) to rank 0's serial
@@ -321,8 +323,9 @@ class DistributedMeshAdapter(MeshAdapter):
         The run's communicator (its ``distribute`` makes every distributed mesh).
     """
 
-    def __init__(self, scene: "Scene", comm: "MPICommunicator") -> None:
-        super().__init__(scene)
+    def __init__(self, scene: "Scene", comm: "MPICommunicator",
+                 crack_model: "CrackModel | None" = None) -> None:
+        super().__init__(scene, crack_model)
         self.comm = comm
         self.copy = comm.serial_copy(scene)
         """Rank 0's serial copy of the fields (shared with the checkpoints)."""
