@@ -242,6 +242,13 @@ class EnergySplit:
         """2 psi+(e[u]), what drives z (sigma:e without a split)."""
         return (2 * self.psi_plus(ngs.Sym(ngs.grad(u)))).Compile()
 
+    def hybrid_drive(self, u: Any) -> Any:
+        """The hybrid formulation's drive (Ambati, Gerasimov, De Lorenzis 2015): 2 psi+(e[u])
+        where psi+ >= psi-, 0 where the compressive part dominates (z is held there)."""
+        e = ngs.Sym(ngs.grad(u))
+        plus = self.psi_plus(e)
+        return ngs.IfPos(plus - self.psi_minus(e), 2 * plus, 0.0).Compile()
+
     def elastic_density(self, u: Any, degradation: Any) -> Any:
         """``g psi+ + psi-`` at u, the integrand of E_el (``degradation`` is g(z))."""
         e = ngs.Sym(ngs.grad(u))

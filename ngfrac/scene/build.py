@@ -2,7 +2,7 @@
 (the domain is :meth:`ngfrac.scene.Geometry.domain`)."""
 from __future__ import annotations
 
-from ..physics.crack_models import CrackModel, crack_model
+from ..physics.crack_models import PFCZM, CrackModel, crack_model
 from ..physics.elastic import ELASTIC_MODELS, ElasticModel
 from .sections import Scene
 
@@ -19,5 +19,11 @@ def elastic_model_of(scene: Scene) -> ElasticModel:
 
 
 def crack_model_of(scene: Scene) -> CrackModel:
-    """The crack model of ``phase_field.model`` (:data:`ngfrac.physics.crack_models.CRACK_MODELS`)."""
-    return crack_model(scene.phase_field.model)
+    """The crack model of ``phase_field.model`` (:data:`ngfrac.physics.crack_models.CRACK_MODELS`);
+    PF-CZM from ``material.E`` (or lam, mu; mode III: mu), ``material.gamma`` (G_f),
+    ``material.strength`` (f_t), ``phase_field.epsilon`` and ``phase_field.softening``."""
+    pf, material = scene.phase_field, scene.material
+    if pf.model == PFCZM.name:
+        return PFCZM(material.young, material.gamma.value(), material.strength, pf.epsilon,
+                     pf.softening)
+    return crack_model(pf.model)

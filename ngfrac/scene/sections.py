@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Mapping, get_type_hints
 import numpy as np
 
 from .checks import check_times, crack_problems, nonfinite_value
-from ..physics.crack_models import CRACK_MODELS
+from ..physics.crack_models import CRACK_MODELS, PFCZM, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
 from .expressions import Expression, ExpressionError
 
@@ -213,6 +213,12 @@ class Material(_Section):
     split: str = "none"
     """Tension/compression split of the elastic energy: "none" (the paper's model), "amor"
     (volumetric-deviatoric) or "miehe" (spectral); see :mod:`ngfrac.physics.splits`."""
+    split_mode: str = "full"
+    """How the split enters: "full" (psi+ degraded in the u-step, Newton) or "hybrid"
+    (Ambati et al. 2015: isotropic u-step, linear; z driven by 2 psi+, not where psi+ < psi-)."""
+    strength: float = math.nan
+    """The tensile strength f_t of ``phase_field.model = "PF-CZM"`` (mode III: the shear
+    strength); NaN = not given."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -235,6 +241,12 @@ class Material(_Section):
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
         _require(self.split in ("none", "amor", "miehe"), s, "split", self.split,
                  "choose 'none' (the paper's model), 'amor' or 'miehe'")
+        _require(self.split_mode in ("full", "hybrid"), s, "split_mode", self.split_mode,
+                 "choose 'full' (psi+ degraded, Newton) or 'hybrid' (Ambati et al.)")
+        _require(self.split_mode == "full" or self.split != "none", s, "split_mode",
+                 self.split_mode, "'hybrid' needs a split: set material.split = 'amor' or 'miehe'")
+        _require(math.isnan(self.strength) or (self.strength > 0 and math.isfinite(self.strength)),
+                 s, "strength", self.strength, "the tensile strength f_t must be > 0")
 
     @property
     def moduli(self) -> tuple[str, ...]:
@@ -253,6 +265,16 @@ class Material(_Section):
         raise ValueError(f"material gives {self.moduli or 'no moduli'}, not lam and mu or E and nu")
 
     @property
+    def young(self) -> float:
+        """Young's modulus E: given, or ``mu (3 lam + 2 mu)/(lam + mu)``; with mu alone (mode
+        III) mu itself, the modulus of the shear onset (PF-CZM's l_ch = mu G_f/f_t^2)."""
+        if self.moduli == ("E", "nu"):
+            return self.E
+        if self.moduli == ("mu", "lam"):
+            return self.mu * (3 * self.lam + 2 * self.mu) / (self.lam + self.mu)
+        return self.shear_modulus
+
+    @property
     def shear_modulus(self) -> float:
         """mu, from whichever moduli are given (1 when none is)."""
         if self.moduli == ("E", "nu"):
@@ -266,8 +288,10 @@ class PhaseField(_Section):
 
     ``alpha1 du/dt = div((1-z)^2 sigma) + f``, ``alpha2 dz/dt = (...)_+``; the u-stiffness is
     ``(1-z)^2 + residual_stiffness`` so the u-problem stays elliptic where z = 1. ``model``
-    is the crack model, the surface term (:mod:`ngfrac.physics.crack_models`): ``"AT2"`` (the paper's)
-    or ``"AT1"`` (an elastic threshold).
+    is the crack model, the surface term (:mod:`ngfrac.physics.crack_models`): ``"AT2"`` (the paper's),
+    ``"AT1"`` (an elastic threshold) or ``"PF-CZM"`` (Wu's cohesive model: needs
+    ``material.strength``; ``softening`` its law). ``drive`` is what drives z: ``"energy"``
+    (sigma:e, or 2 psi+ with a split) or ``"rankine"`` (PF-CZM: ``<sigma_1>^2/E``).
     """
 
     SECTION: ClassVar[str] = "phase_field"
@@ -278,6 +302,10 @@ class PhaseField(_Section):
     model: str = "AT2"
     crack_pressure: Expression = Expression("0.0")
     """p(t) inside the crack (the pressurized-crack work term ``int p u.grad z``); 0 = none."""
+    softening: str = "linear"
+    """PF-CZM's softening law: "linear", "exponential" or "cornelissen"."""
+    drive: str = "energy"
+    """W of the z-equation: "energy" (sigma:e; 2 psi+ with a split) or "rankine" (PF-CZM)."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -290,6 +318,12 @@ class PhaseField(_Section):
                  self.residual_stiffness, "must be in (0, 0.1); 1e-6 is typical")
         _require(self.model in CRACK_MODELS, s, "model", self.model,
                  f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
+        _require(self.softening in SOFTENING_LAWS, s, "softening", self.softening,
+                 f"choose {' or '.join(repr(m) for m in SOFTENING_LAWS)}")
+        _require(self.drive in ("energy", "rankine"), s, "drive", self.drive,
+                 "choose 'energy' (sigma:e) or 'rankine' (<sigma_1>^2/E, PF-CZM)")
+        _require(self.drive == "energy" or self.model == "PF-CZM", s, "drive", self.drive,
+                 "'rankine' is PF-CZM's drive: set phase_field.model = 'PF-CZM'")
 
     @property
     def pressurized(self) -> bool:
@@ -946,6 +980,7 @@ class Scene:
         for problem in crack_problems(self.geometry, [c.points for c in self.cracks], normals):
             raise SceneError(problem)
         self._check_gamma_positive()
+        self._check_crack_model()
         self._check_finite_expressions()
 
     def _coerce_sections(self) -> None:
@@ -1041,6 +1076,33 @@ class Scene:
         if split != "none" and kind == "mode3":
             raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
                              "model.kind = 'mode3' has no tension or compression: set split = 'none'")
+
+    def _check_crack_model(self) -> None:
+        """PF-CZM needs a strength, a constant toughness and eps below its limit; the Rankine
+        drive an isotropic u-step."""
+        pf, material = self.phase_field, self.material
+        if pf.drive == "rankine" and material.split != "none" and material.split_mode == "full":
+            raise SceneError(f"phase_field.drive = 'rankine' takes the isotropic u-step, but "
+                             f"material.split = {material.split!r} degrades psi+ only: set "
+                             "material.split = 'none' or material.split_mode = 'hybrid'")
+        if pf.model != "PF-CZM":
+            return
+        if math.isnan(material.strength):
+            raise SceneError("material.strength is missing: phase_field.model = 'PF-CZM' needs "
+                             "the tensile strength f_t > 0")
+        if not material.gamma.is_constant:
+            raise SceneError(f"material.gamma = {material.gamma.text!r} is not allowed with "
+                             "phase_field.model = 'PF-CZM': its a1 = 4 E G_f/(pi eps f_t^2) "
+                             "needs one G_f; give a number")
+        try:
+            PFCZM(material.young, material.gamma.value(), material.strength, pf.epsilon,
+                  pf.softening)
+        except ValueError:
+            limit = PFCZM(material.young, material.gamma.value(), material.strength,
+                          1e-300, pf.softening).epsilon_limit()
+            raise SceneError(f"phase_field.epsilon = {pf.epsilon!r} is not allowed: PF-CZM with "
+                             f"the {pf.softening} law needs epsilon <= {limit:.4g} (g convex; "
+                             "4 l_ch/(pi a1_min), l_ch = E G_f/f_t^2): lower it") from None
 
     def _domain_text(self) -> str:
         if self.geometry.kind == "occ":

@@ -44,7 +44,7 @@ from ..mesh.fields import MeshFields
 from .state import STATE_FIELDS, StepperState, copy_of
 from ..fem.threads import ThreadPolicy
 from .time_control import StepSizeControl
-from .u_problem import DisplacementProblem, SolverError
+from .u_problem import DisplacementProblem, NewtonFailure, SolverError
 from .z_problem import PhaseFieldProblem
 
 __all__ = ["PhaseFieldStepper"]
@@ -284,7 +284,8 @@ class PhaseFieldStepper:
         self.u_problem.solve(self._step_label())
 
     def step(self, diagnose: bool = True) -> StepRecord:
-        """Advance one time step (with adaptive time steps, redo it smaller if z jumped).
+        """Advance one time step (with adaptive time steps, redo it smaller if z jumped or its
+        Newton u-solve failed).
 
         Parameters
         ----------
@@ -307,7 +308,15 @@ class PhaseFieldStepper:
                 solve_started = time.perf_counter()
                 iterations = self._solve_both() if self._concurrent else None
                 if iterations is None:
-                    self.solve_u()
+                    try:
+                        self.solve_u()
+                    except NewtonFailure:
+                        if not self.control.halve():
+                            raise  # at dt already: the clear error
+                        f.u.vec.data = f.u_prev.vec  # Newton's start; z has not changed yet
+                        self.timer.add("time: halved steps (Newton failed)", 0.0)
+                        solve_s += time.perf_counter() - solve_started
+                        continue
                 solve_s += time.perf_counter() - solve_started
                 if diagnose:  # before z changes and before any new mesh: this solve's residual
                     with self.timer.phase("diagnostics: reactions"):

@@ -2,7 +2,8 @@
 
 Times are counted in ticks of ``time.dt`` (t = ticks * dt, a product, never a sum). With
 ``time.adaptive``, a step whose largest nodal change of z exceeds ``dz_target`` is redone
-with a step 2**j times smaller (j from how far it is off); after a step that changed z by
+with a step 2**j times smaller (j from how far it is off), and a step whose Newton u-solve
+(a split) failed is redone with half the step (:meth:`StepSizeControl.halve`); after a step that changed z by
 less than a quarter of the target, the step doubles when the time is a multiple of the
 doubled step (so output times stay on the grid).
 """
@@ -38,6 +39,15 @@ class StepSizeControl:
         if not (s.adaptive and dz_max > s.dz_target and self.level > 0):
             return False
         self.level = max(0, self.level - max(1, math.ceil(math.log2(dz_max / s.dz_target))))
+        return True
+
+    def halve(self) -> bool:
+        """Lower the level by one for a step to be redone (its Newton u-solve failed); False
+        when the step is already dt (level 0, or fixed steps): the run must give up. So a step
+        is halved at most ``max_doublings`` times."""
+        if self.level == 0:
+            return False
+        self.level -= 1
         return True
 
     def accepted(self, done: int, dz_max: float) -> None:

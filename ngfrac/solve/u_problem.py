@@ -5,7 +5,8 @@
 
 One linear solve (a factorization made once per mesh and numerically updated after each
 assembly, or CG with BDDC), or Newton on the energy with a tension/compression split
-(:mod:`ngfrac.physics.splits`). Its residual gives the reaction forces
+(:mod:`ngfrac.physics.splits`; with ``material.split_mode = "hybrid"`` the split only drives z
+and the u-step stays linear). Its residual gives the reaction forces
 (:mod:`ngfrac.post.reactions`).
 """
 from __future__ import annotations
@@ -32,6 +33,11 @@ class SolverError(RuntimeError):
     """A linear solve failed or produced non-finite values."""
 
 
+class NewtonFailure(SolverError):
+    """Newton's u-solve (with a split) did not converge: the stepper redoes the step with
+    half the time step while it can (:meth:`ngfrac.solve.time_control.StepSizeControl.halve`)."""
+
+
 class DisplacementProblem:
     """Forms, solver and residual of the u-sub-step on one :class:`MeshFields`.
 
@@ -56,7 +62,14 @@ class DisplacementProblem:
         self.eta = pf.residual_stiffness
         fes, dx = fields.fes_u, fields.dx
         self.dirichlet = DirichletValues(fes, model, model.boundary_values(fields.mesh, scene.loads, time))
-        self.split = make_split(model, scene.material.split)
+        material = scene.material
+        self.drive_split = make_split(model, material.split)
+        """The split of the drive W (with ``split_mode = "hybrid"`` only of the drive)."""
+        self.hybrid = material.split_mode == "hybrid"
+        self.split = None if self.hybrid else self.drive_split
+        """The split of the u-step's energy (Newton), None for the isotropic, linear u-step."""
+        self.crack_model = crack_model
+        self.rankine = pf.drive == "rankine"
         self.degradation = crack_model.degradation(fields.z, self.eta)
         u, v = fes.TnT()
         stiffness = self.degradation * model.stress_strain(u, v)
@@ -189,8 +202,10 @@ class DisplacementProblem:
             try:
                 self._newton.solve(rhs)
             except RuntimeError as err:
-                raise SolverError(f"the u-solve (material.split = {self.split.kind!r}) failed at "
-                                  f"step {step}: {err}; lower time.dt") from None
+                raise NewtonFailure(f"the u-solve (material.split = {self.split.kind!r}) failed at "
+                                    f"step {step}: {err}; lower time.dt (with time.adaptive = "
+                                    "true a failed step is first redone with half the step, "
+                                    "down to time.dt)") from None
 
     def _newton_solver(self, alpha1: float) -> NewtonSolver:
         """Newton for the split problem; alpha1 > 0 adds the energy of the alpha1 term (its
@@ -221,8 +236,13 @@ class DisplacementProblem:
         return r
 
     def drive(self, u: ngs.GridFunction) -> ngs.CoefficientFunction:
-        """W of the z-equation at ``u``: sigma:e, or 2 psi+ with a split."""
-        return self.model.energy_density(u) if self.split is None else self.split.drive(u)
+        """W of the z-equation at ``u``: sigma:e, or 2 psi+ with a split (hybrid: 0 where
+        psi+ < psi-), or PF-CZM's Rankine ``<sigma_1>^2/E`` (``phase_field.drive``)."""
+        if self.rankine:
+            return self.crack_model.rankine_drive(self.model.stress(u), self.model.n_components)
+        if self.drive_split is None:
+            return self.model.energy_density(u)
+        return self.drive_split.hybrid_drive(u) if self.hybrid else self.drive_split.drive(u)
 
     def elastic_density(self) -> ngs.CoefficientFunction:
         """W with E_el = 1/2 int (g(z) + eta) W at the current u: sigma:e, or with a split

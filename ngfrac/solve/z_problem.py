@@ -10,8 +10,11 @@ mesh and are assembled once per mesh, only the drive part D is assembled per ste
 (docs/benchmarks.md has the saving). The right-hand side needs no assembly of its own:
 int (alpha2/dt z_old + W) w = (alpha2/dt) M z_old + D 1, with 1 the coefficients of the
 constant function (the vertex dofs of the hierarchical basis), plus the source assembled
-once per mesh and the crack pressure's term per step. The surface energy is a quadratic
-form of K: E_surf = 1/2 z.K z - s.z (s the source), the same sum as its quadrature.
+once per mesh and the crack pressure's term per step. A concave surface part C
+(PF-CZM's ``-z^2/eps``, :meth:`~ngfrac.physics.crack_models.CrackModel.concave`) stays out of
+the matrix and enters the right-hand side at z_old, ``-C z_old`` (assembled once per mesh, one
+product per step). The surface energy is a quadratic form of K (and C):
+E_surf = 1/2 z.(K + C) z - s.z (s the source), the same sum as its quadrature.
 """
 from __future__ import annotations
 
@@ -76,6 +79,10 @@ class PhaseFieldProblem:
         self._k += crack_model.stiffness(zt, w, gamma, eps) * dx
         self._m = ngs.BilinearForm(fields.fes_z, symmetric=True)
         self._m += zt * w * dx
+        concave = crack_model.concave(zt, w, gamma, eps)  # PF-CZM: explicit, -C z_old
+        self._concave = None if concave is None else ngs.BilinearForm(fields.fes_z, symmetric=True)
+        if concave is not None:
+            self._concave += concave * dx
         self._fixed_assembled = False
         source = crack_model.source(w, gamma, eps)  # AT1: -3 gamma/(8 eps) w
         self._source = None if source is None else ngs.LinearForm(source * dx)
@@ -89,6 +96,9 @@ class PhaseFieldProblem:
         if not isinstance(gamma, (int, float)):  # the crack length: the surface energy at gamma = 1
             unit_k = ngs.BilinearForm(fields.fes_z, symmetric=True)
             unit_k += crack_model.stiffness(zt, w, 1.0, eps) * dx
+            unit_concave = crack_model.concave(zt, w, 1.0, eps)
+            if unit_concave is not None:  # one matrix for the length: K + C at gamma = 1
+                unit_k += unit_concave * dx
             unit_source = crack_model.source(w, 1.0, eps)
             self._unit_surface = (unit_k, None if unit_source is None
                                   else ngs.LinearForm(unit_source * dx))
@@ -100,6 +110,9 @@ class PhaseFieldProblem:
         self._distributed: DistributedSystem | None = None
         if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
             rhs = (pf.alpha2 * inv_dt * fields.z + explicit) * w
+            explicit_concave = crack_model.concave(fields.z, w, gamma, eps)
+            if explicit_concave is not None:
+                rhs = rhs - explicit_concave
             for part in (source, pressure):
                 rhs = rhs if part is None else rhs + part
             self._distributed_rhs = ngs.LinearForm(rhs * dx)
@@ -137,7 +150,7 @@ class PhaseFieldProblem:
         """K, M and the source terms: once per mesh."""
         if self._fixed_assembled:
             return
-        forms = [self._k, self._m, self._source]
+        forms = [self._k, self._m, self._source, self._concave]
         if self._unit_surface is not None:
             forms += list(self._unit_surface)
         for form in forms:
@@ -160,6 +173,8 @@ class PhaseFieldProblem:
         rhs.data += mass_factor * (mass * self.fields.z.vec)
         if self._source is not None:
             rhs.data += self._source.vec
+        if self._concave is not None:
+            rhs.data -= self._concave.mat * self.fields.z.vec
         if self._pressure is not None:
             self._pressure.Assemble()
             rhs.data += self._pressure.vec
@@ -172,7 +187,7 @@ class PhaseFieldProblem:
     def surface_energy(self) -> tuple[float, float] | None:
         """(E_surf, crack_length) of the current z from the assembled K and source.
 
-        1/2 z.K z - s.z is the crack model's surface energy summed with the forms' quadrature
+        1/2 z.(K + C) z - s.z is the crack model's surface energy summed with the forms' quadrature
         (the same rule as the energies' integrals); the crack length is the same at gamma = 1.
         None on a distributed mesh, whose matrices are not local.
         """
@@ -180,7 +195,8 @@ class PhaseFieldProblem:
             return None
         self._assemble_fixed()
         z = self.fields.z.vec
-        e_surf = _surface_value(self._k.mat, self._source, z)
+        e_surf = _surface_value(self._k.mat, self._source, z,
+                                None if self._concave is None else self._concave.mat)
         if self._unit_surface is None:
             return e_surf, e_surf / float(self._gamma)
         return e_surf, _surface_value(self._unit_surface[0].mat, self._unit_surface[1], z)
@@ -271,10 +287,13 @@ def _constant_one(fes: ngs.FESpace, like: ngs.BaseVector) -> ngs.BaseVector:
     return ones
 
 
-def _surface_value(stiffness: Any, source: ngs.LinearForm | None, z: ngs.BaseVector) -> float:
-    """1/2 z.K z - s.z, summed with :func:`math.fsum` (independent of the thread count)."""
+def _surface_value(stiffness: Any, source: ngs.LinearForm | None, z: ngs.BaseVector,
+                   concave: Any = None) -> float:
+    """1/2 z.(K + C) z - s.z, summed with :func:`math.fsum` (independent of the thread count)."""
     values = z.FV().NumPy()
     terms = 0.5 * values * (stiffness * z).Evaluate().FV().NumPy()
+    if concave is not None:
+        terms = terms + 0.5 * values * (concave * z).Evaluate().FV().NumPy()
     if source is not None:
         terms = terms - source.vec.FV().NumPy() * values
     return math.fsum(terms)
