@@ -192,10 +192,11 @@ SOFTENING_LAWS: dict[str, tuple[float, float, float]] = {
 """(p, a2, a3) of PF-CZM's degradation per ``phase_field.softening`` (Wu 2017; Wu & Nguyen
 2018): linear, exponential and Cornelissen et al.'s (1986) concrete softening."""
 
-CONVEX_A1: dict[str, float] = {"linear": 1.5, "exponential": 2.674, "cornelissen": 3.386}
-"""The smallest a1 for which PF-CZM's g is convex on [0, 1] (linear: 3/2 exactly, Wu's
-``eps <= 8 l_ch/(3 pi)``; the others computed from g'' on a grid of 2e5 points, rounded up):
-the epsilon limit is ``eps <= 4 l_ch/(pi a1_min)``."""
+CONVEX_A1: dict[str, float] = {law: p + a2 for law, (p, a2, _) in SOFTENING_LAWS.items()}
+"""The smallest a1 for which PF-CZM's g is convex on [0, 1]: ``g''(0) = 2 a1 (a1 - p - a2)``,
+so a1 >= p + a2 (for the three laws the smallest g'' on [0, 1] is at z = 0 then: checked on
+4e5 points); linear: 3/2, Wu's ``eps <= 8 l_ch/(3 pi)``; exponential 2^(5/3) - 1/2 = 2.675;
+Cornelissen 3.387. The epsilon limit is ``eps <= 4 l_ch/(pi a1_min)``."""
 
 
 def _nonnegative(x: Any) -> Any:
@@ -265,7 +266,8 @@ class PFCZM(CrackModel):
         if self.epsilon > limit:
             raise ValueError(f"epsilon = {epsilon!r} is above PF-CZM's limit {limit:.4g} for the "
                              f"{softening} law (4 l_ch/(pi a1_min), l_ch = E G_f/f_t^2 = "
-                             f"{self.l_ch:.4g}, a1_min = {CONVEX_A1[softening]}): lower it")
+                             f"{self.l_ch:.4g}, a1_min = p + a2 = {CONVEX_A1[softening]:.4g}): "
+                             "lower it")
 
     def epsilon_limit(self) -> float:
         """The largest eps for which g is convex on [0, 1]: ``4 l_ch/(pi a1_min)``

@@ -1,0 +1,244 @@
+"""PF-CZM (Wu 2017; Wu & Nguyen 2018): the degradation and its laws against closed forms, the
+optimal profile's cost, the epsilon limit, and a bar in uniaxial tension run through the
+stepper: the peak is f_t at two epsilons, the elastic phase is exact, and (slow) one band
+dissipates G_f times its area.
+
+The bar: plane stress, nu = 0, E = G_f = f_t = 1 (l_ch = 1), length 1, pulled at its right end
+with the left end fixed. Without a seed the state stays homogeneous (u = t x, z uniform: P1
+represents it exactly), so the force over the height is the stress. Its peak is f_t: at z = 0
+the drive -1/2 g'(0) W = a1 W/2 meets the constant source 2 G_f/(pi eps) at W = f_t^2/E for
+every eps. The staggered step lags: z of step k uses u of step k - 1, and the force of step k
+is g(z of step k - 1) E u_k, so the discrete peak overshoots by at most two increments,
+2 du E/L = 1 % here; alpha2/dt = 0.02 is 500x below
+G_f/eps = 10 (rate-independent).
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import pytest
+
+from ngfrac import PhaseFieldStepper, Scene
+from ngfrac.physics.crack_models import CONVEX_A1, CRACK_MODELS, PFCZM, SOFTENING_LAWS
+from ngfrac.scene import SceneError
+from ngfrac.scene.build import crack_model_of
+
+LAWS = tuple(SOFTENING_LAWS)
+DU = 0.005
+"""Load increment of the bar (its end displacement per step, L = 1)."""
+START = 0.97
+"""The bar's end displacement at t = 0 (elastic): the run starts just below the peak."""
+H = 0.05
+
+
+def test_pfczm_is_registered_and_built_from_the_scene():
+    assert CRACK_MODELS["PF-CZM"] is PFCZM
+    model = crack_model_of(bar_scene(0.1, softening="cornelissen"))
+    assert isinstance(model, PFCZM) and model.softening == "cornelissen"
+    assert model.l_ch == pytest.approx(1.0) and model.a1 == pytest.approx(4 / (math.pi * 0.1))
+    assert model.c_w == pytest.approx(math.pi) and not model.quadratic_degradation
+
+
+def test_the_three_laws_parameters():
+    assert SOFTENING_LAWS["linear"] == (2.0, -0.5, 0.0)
+    p, a2, a3 = SOFTENING_LAWS["exponential"]
+    assert (p, a3) == (2.5, 0.0) and a2 == pytest.approx(0.1748, abs=1e-4)
+    assert SOFTENING_LAWS["cornelissen"] == (2.0, 1.3868, 0.6567)
+
+
+@pytest.mark.parametrize("law", LAWS)
+def test_degradation_ends_and_slopes(law):
+    """g(0) = 1, g(1) = 0 (+ eta), g'(0) = -a1, and g', g'' against central differences
+    (step 1e-6: truncation ~1e-12 times g''', round-off ~1e-10 relative)."""
+    model = PFCZM(3.0, 0.5, 2.0, 0.05, law)  # l_ch = 0.375, a1 = 9.55
+    eta = 1e-6
+    assert model.degradation(0.0, eta) == pytest.approx(1 + eta, rel=1e-15)
+    assert model.degradation(1.0, eta) == pytest.approx(eta, rel=1e-12)
+    h = 1e-6
+    slope0 = (model.degradation(h, 0.0) - model.degradation(0.0, 0.0)) / h
+    assert slope0 == pytest.approx(-model.a1, rel=1e-4)  # one-sided: error g''(0) h / 2
+    assert model.degradation_slope(0.0) == pytest.approx(-model.a1, rel=1e-14)
+    z = np.linspace(0.01, 0.98, 25)
+    slope = (model.degradation(z + h, 0.0) - model.degradation(z - h, 0.0)) / (2 * h)
+    np.testing.assert_allclose(model.degradation_slope(z), slope, rtol=1e-7, atol=1e-8)
+    curvature = (model.degradation_slope(z + h) - model.degradation_slope(z - h)) / (2 * h)
+    np.testing.assert_allclose(model.degradation_curvature(z), curvature, rtol=1e-6, atol=1e-6)
+    assert np.all(np.diff(model.degradation(np.linspace(0, 1, 1001), 0.0)) < 0)  # decreasing
+
+
+@pytest.mark.parametrize("law", LAWS)
+def test_g_is_convex_exactly_up_to_the_epsilon_limit(law):
+    """The limit is where g stops being convex on [0, 1]: a1 >= p + a2 (:data:`CONVEX_A1`;
+    linear: Wu's eps <= 8 l_ch/(3 pi)). At the limit the smallest g'' is 0 (at z = 0), 2 %
+    beyond it negative."""
+    p, a2, _ = SOFTENING_LAWS[law]
+    assert CONVEX_A1[law] == p + a2
+    z = np.linspace(0.0, 0.999, 20001)
+    inside = PFCZM(1.0, 1.0, 1.0, PFCZM(1.0, 1.0, 1.0, 1e-3, law).epsilon_limit(), law)
+    assert inside.degradation_curvature(z).min() >= -1e-9
+    beyond = PFCZM(1.0, 1.0, 1.0, 1e-3, law)
+    beyond.a1 = CONVEX_A1[law] * 0.98
+    assert beyond.degradation_curvature(z).min() < -1e-3
+    if law == "linear":
+        assert inside.epsilon_limit() == pytest.approx(8 / (3 * math.pi))
+
+
+def test_the_optimal_profile_costs_one_per_unit_length():
+    """w = ((2z - z^2)/eps + eps z'^2)/pi of z = 1 - sin(|x|/eps) integrates to 1 (trapezoid
+    rule on 2e5 intervals: error ~1e-9; the kink at pi eps/2 is where z' = 0 already)."""
+    eps = 0.07
+    model = PFCZM(1.0, 1.0, 1.0, eps)
+    x = np.linspace(0.0, 3 * eps, 200001)
+    z = model.profile(x, eps)
+    dz = np.gradient(z, x)
+    density = ((2 * z - z * z) / eps + eps * dz * dz) / math.pi
+    assert 2 * np.trapezoid(density, x) == pytest.approx(1.0, abs=1e-6)
+    assert model.profile(np.array([math.pi * eps / 2, 1.0]), eps).tolist() == [0.0, 0.0]
+    assert model.half_width(eps) == pytest.approx(eps * math.pi / 6)  # 1 - sin(pi/6) = 1/2
+
+
+@pytest.mark.parametrize("law, limit", [("linear", 8 / (3 * math.pi)),
+                                        ("exponential", 4 / (math.pi * (2 ** (5 / 3) - 0.5))),
+                                        ("cornelissen", 4 / (math.pi * 3.3868))])
+def test_epsilon_above_the_limit_is_refused(law, limit):
+    eps = 1.01 * limit
+    with pytest.raises(SceneError, match=rf"^phase_field\.epsilon = {eps!r} is not allowed: PF-CZM "
+                                         rf"with the {law} law needs epsilon <= {limit:.4g}"):
+        bar_scene(eps, softening=law)
+    bar_scene(0.99 * limit, softening=law)  # below: accepted
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"material": {"strength": None}}, r"^material\.strength is missing"),
+    ({"material": {"strength": -1.0}}, r"^material\.strength = -1\.0 is not allowed"),
+    ({"material": {"gamma": "1 + 0.1*x"}}, r"^material\.gamma = '1 \+ 0\.1\*x' is not allowed"),
+    ({"phase_field": {"softening": "bilinear"}}, r"^phase_field\.softening = 'bilinear'"),
+    ({"phase_field": {"drive": "rankine", "model": "AT2"}}, r"^phase_field\.drive = 'rankine'"),
+    ({"phase_field": {"drive": "stress"}}, r"^phase_field\.drive = 'stress'"),
+])
+def test_bad_pfczm_input_is_one_line(change, match):
+    with pytest.raises(SceneError, match=match) as info:
+        bar_scene(0.1, **{k: v for k, v in change.get("phase_field", {}).items()},
+                  material=change.get("material"))
+    assert "\n" not in str(info.value)
+
+
+def bar_scene(eps: float, softening: str = "linear", model: str = "PF-CZM",
+              material: dict | None = None, drive: str = "energy", **phase_field) -> Scene:
+    """The uniaxial bar of the module docstring (one row of elements: z stays uniform)."""
+    mat = {"E": 1.0, "nu": 0.0, "gamma": 1.0, "strength": 1.0}
+    for key, value in (material or {}).items():
+        if value is None:
+            mat.pop(key)
+        else:
+            mat[key] = value
+    pf = {"epsilon": eps, "alpha2": 1e-4, "model": model, "softening": softening,
+          "drive": drive, **phase_field}
+    return Scene.from_dict({
+        "model": {"kind": "plane_stress"}, "material": mat, "phase_field": pf,
+        "geometry": {"width": 1.0, "height": H, "mesh_size": 0.05},
+        "loads": [{"boundary": "left", "value": ["0", "0"]},
+                  {"boundary": "right", "value": [f"{START} + t", "0"]}],
+        "time": {"dt": DU, "t_end": 30 * DU}, "adaptivity": {"enabled": False},
+        "output": {"vtk_every": 0}, "discretization": {"order": 1}})
+
+
+@functools.lru_cache(maxsize=None)
+def bar_run(eps: float, drive: str = "energy") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(end displacement, stress = force/H, largest z) per step of the bar, t = 0 included."""
+    stepper = PhaseFieldStepper(bar_scene(eps, drive=drive))
+    rows = [(START, stepper.forces["Fx_right"] / H, 0.0)]
+    for record in stepper.run():
+        rows.append((START + record.t, record.forces["Fx_right"] / H,
+                     float(stepper.z_node_values().max())))
+    return tuple(np.array(column) for column in zip(*rows))
+
+
+@pytest.mark.parametrize("eps", [0.1, 0.05])
+def test_the_bar_peaks_at_f_t_at_two_epsilons(eps):
+    """Peak stress / f_t - 1 in [0, 3 %] (the issue's tolerance; the model's own peak is f_t
+    exactly, the staggered step adds at most two increments, 1 %), then it softens."""
+    _, stress, z = bar_run(eps)
+    peak = stress.max()
+    assert 0.0 <= peak - 1.0 <= 0.03, f"peak {peak:.5f} f_t at eps = {eps}"
+    assert peak <= (1 + 2 * DU) * (1 + 1e-6) + 1e-12  # two increments, stiffness 1 + eta
+    assert stress[-1] < peak - 0.005 and z[-1] > 0  # past the peak: softening with damage
+
+
+@pytest.mark.parametrize("eps", [0.1, 0.05])
+def test_the_homogeneous_softening_follows_the_closed_form(eps):
+    """Linear law, homogeneous equilibrium: -1/2 g'(d) E e^2 = 2 G_f (1 - d)/(pi eps) gives
+    (1 - d)^2 = (E e/f_t - a1/2)/(1 - a1/2). z of step k answers u of step k - 1; the
+    linearized drive and alpha2/dt = 0.02 leave 2 % (measured: < 1 %)."""
+    u, _, z = bar_run(eps)
+    a1 = 4 / (math.pi * eps)
+    damaged = z[1:] > 1e-3
+    expected = 1 - np.sqrt((u[:-1][damaged] - a1 / 2) / (1 - a1 / 2))
+    assert damaged.sum() >= 10
+    np.testing.assert_allclose(z[1:][damaged], expected, rtol=0.02)
+
+
+def test_the_onset_of_damage_is_at_f_t():
+    """z stays exactly 0 (P1: the node values are the dofs) while the stress of the drive's u
+    (the previous step's, with coupling = "paper") is below f_t (1 - 1e-3), and is positive
+    at every step whose drive is above f_t (1 + 1e-3); at f_t itself (u = 1 up to
+    round-off) z is 0 up to 1e-14."""
+    u, _, z = bar_run(0.1)
+    driving = u[:-1]  # the stress E u/L of the u of step k's drive (step k-1's), undamaged
+    below, above = driving < 1.0 - 1e-3, driving > 1.0 + 1e-3
+    assert below.sum() >= 5 and above.sum() >= 10
+    assert np.all(z[1:][below] == 0.0)
+    assert np.all(z[1:][above] > 1e-4)
+    assert np.all(z[1:][~below & ~above] <= 1e-14)
+
+
+def test_the_rankine_drive_equals_the_energy_drive_in_uniaxial_tension():
+    """nu = 0, uniaxial stress: <sigma_1>^2/E = sigma^2/E = sigma:e, so the runs agree to
+    round-off (1e-10 relative)."""
+    _, energy_stress, energy_z = bar_run(0.1)
+    _, rankine_stress, rankine_z = bar_run(0.1, "rankine")
+    np.testing.assert_allclose(rankine_stress, energy_stress, rtol=1e-10)
+    np.testing.assert_allclose(rankine_z, energy_z, rtol=1e-8, atol=1e-14)
+
+
+@pytest.mark.slow
+def test_one_band_dissipates_g_f_times_its_area():
+    """A bar that fails through one band: L = 0.1 < 2 l_ch (no snap-back under displacement
+    control), l_ch = E G_f/f_t^2 = 0.1, eps = 0.01, h = eps/4, a z0 bump of 1e-3 at mid-length
+    seeds the band. Work of the end force minus the elastic energy left = G_f H within 5 %."""
+    E, G_f, f_t, eps, length, height = 1.0, 0.1, 1.0, 0.01, 0.1, 0.005
+    h = eps / 4
+    peak_u = f_t * length / E
+    du = 5e-4
+    scene = Scene.from_dict({
+        "model": {"kind": "plane_stress"},
+        "material": {"E": E, "nu": 0.0, "gamma": G_f, "strength": f_t},
+        "phase_field": {"epsilon": eps, "alpha2": 1e-6, "model": "PF-CZM"},
+        "geometry": {"width": length, "height": height, "mesh_size": h},
+        "loads": [{"boundary": "left", "value": ["0", "0"]},
+                  {"boundary": "right", "value": [f"{0.9 * peak_u} + t", "0"]}],
+        "time": {"dt": du, "t_end": 2.0 * G_f / f_t + 0.1 * peak_u - 0.9 * peak_u + 20 * du},
+        "adaptivity": {"enabled": False}, "output": {"vtk_every": 0},
+        "discretization": {"order": 1}})
+    stepper = PhaseFieldStepper(scene)
+    f = stepper.fields
+    x = f.nodes.points[0]
+    f.nodes.assign(f.z, 1e-3 * np.exp(-((x - length / 2) / eps) ** 2))
+    with stepper.u_problem.static():  # u0 in equilibrium with the seed
+        stepper.u_problem.solve("0")
+    f.u_prev.vec.data = f.u.vec
+    u0 = 0.9 * peak_u
+    displacement, force = [u0], [stepper.forces["Fx_right"]]
+    work_before = 0.5 * u0 * force[0]  # elastic up to u0 (the seed changes it by ~1e-3 %)
+    last = None
+    for record in stepper.run():
+        displacement.append(u0 + record.t)
+        force.append(record.forces["Fx_right"])
+        last = record
+    work = work_before + np.trapezoid(force, displacement)
+    dissipated = work - last.E_el
+    assert max(force) / height == pytest.approx(f_t, rel=0.03)
+    assert force[-1] < 0.02 * max(force), "the bar has not failed"
+    assert dissipated / (G_f * height) == pytest.approx(1.0, rel=0.05)
