@@ -224,7 +224,7 @@ def test_one_band_dissipates_g_f_times_its_area():
         "discretization": {"order": 1}})
     stepper = PhaseFieldStepper(scene)
     f = stepper.fields
-    x = f.nodes.points[0]
+    x = f.nodes.points[:, 0]
     f.nodes.assign(f.z, 1e-3 * np.exp(-((x - length / 2) / eps) ** 2))
     with stepper.u_problem.static():  # u0 in equilibrium with the seed
         stepper.u_problem.solve("0")
