@@ -47,7 +47,8 @@ class PhaseFieldProblem:
     gamma : float or ngsolve.CoefficientFunction
         The toughness.
     drive : ngsolve.CoefficientFunction
-        W, the elastic drive (sigma:e at u_prev or u; 2 psi+ with a split).
+        W, the elastic drive (sigma:e at u_prev or u; 2 psi+ with a split; PF-CZM's Rankine
+        drive: :meth:`ngfrac.solve.u_problem.DisplacementProblem.drive`).
     context : StepContext
         The step's 1/dt, threads and timer.
     u_drive : ngsolve.GridFunction, optional

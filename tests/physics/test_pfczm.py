@@ -242,3 +242,45 @@ def test_one_band_dissipates_g_f_times_its_area():
     assert max(force) / height == pytest.approx(f_t, rel=0.03)
     assert force[-1] < 0.02 * max(force), "the bar has not failed"
     assert dissipated / (G_f * height) == pytest.approx(1.0, rel=0.05)
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_largest_principal_stress_is_the_largest_eigenvalue(n):
+    """The closed forms against numpy.linalg.eigvalsh for a few symmetric matrices (1e-12)."""
+    import ngsolve as ngs
+    from netgen.geom2d import unit_square
+
+    from ngfrac.physics.crack_models import largest_principal_stress
+
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=1.0))
+    rng = np.random.default_rng(25)
+    for _ in range(5):
+        a = rng.normal(size=(n, n))
+        sym = a + a.T
+        value = largest_principal_stress(ngs.CF(tuple(sym.ravel()), dims=(n, n)), n)(mesh(0.3, 0.3))
+        assert value == pytest.approx(np.linalg.eigvalsh(sym)[-1], abs=1e-12 * np.abs(sym).max())
+
+
+@pytest.mark.parametrize("drive", ["energy", "rankine"])
+def test_mode3_onset_is_at_the_shear_strength(drive):
+    """Mode III takes mu for E (l_ch = mu G_f/f_t^2): homogeneous shear u = (0.97 + t) y on a
+    unit square (mu = 1) keeps z exactly 0 while the drive's shear stress is below f_t
+    (1 - 1e-3) and damages above f_t (1 + 1e-3), with either drive (|tau|^2/mu both)."""
+    scene = Scene.from_dict({
+        "model": {"kind": "mode3"},
+        "material": {"mu": 1.0, "gamma": 1.0, "strength": 1.0},
+        "phase_field": {"epsilon": 0.1, "alpha2": 1e-4, "model": "PF-CZM", "drive": drive},
+        "geometry": {"width": 1.0, "height": 1.0, "mesh_size": 0.5},
+        "loads": [{"boundary": "top", "value": f"{START} + t"}, {"boundary": "bottom", "value": "0"}],
+        "time": {"dt": DU, "t_end": 12 * DU}, "adaptivity": {"enabled": False},
+        "output": {"vtk_every": 0}, "discretization": {"order": 1}})
+    stepper = PhaseFieldStepper(scene)
+    assert stepper.crack_model.young == 1.0
+    driving, z = [START], []
+    for record in stepper.run():
+        driving.append(START + record.t)
+        z.append(stepper.z_node_values().max())
+    driving, z = np.array(driving[:-1]), np.array(z)
+    below, above = driving < 1 - 1e-3, driving > 1 + 1e-3
+    assert below.sum() >= 5 and above.sum() >= 3
+    assert np.all(z[below] == 0.0) and np.all(z[above] > 1e-4)
