@@ -31,6 +31,8 @@ DU = 0.005
 START = 0.97
 """The bar's end displacement at t = 0 (elastic): the run starts just below the peak."""
 H = 0.05
+DU_BAND = 5e-4
+"""Load increment of the slow band test (L = 0.1: 0.5 % of the length per step)."""
 
 
 def test_pfczm_is_registered_and_built_from_the_scene():
@@ -205,40 +207,43 @@ def test_the_rankine_drive_equals_the_energy_drive_in_uniaxial_tension():
 
 @pytest.mark.slow
 def test_one_band_dissipates_g_f_times_its_area():
-    """A bar that fails through one band: L = 0.1 < 2 l_ch (no snap-back under displacement
-    control), l_ch = E G_f/f_t^2 = 0.1, eps = 0.01, h = eps/4, a z0 bump of 1e-3 at mid-length
-    seeds the band. Work of the end force minus the elastic energy left = G_f H within 5 %."""
+    """A bar that fails through one band dissipates G_f times its cross-section, within 5 %.
+
+    L = 0.1 < 2 l_ch (l_ch = E G_f/f_t^2 = 0.1: no snap-back under displacement control),
+    eps = 0.01 (a1 = 12.7), P2 with h = eps/4 in a strip two elements high, a z0 bump of 0.01
+    (width eps) at mid-length seeds the band (the rest stays elastic). The end is pulled from
+    0.9 of the peak displacement to 3 w_c/2 = 0.3 (w_c = 2 G_f/f_t, the linear law's opening),
+    where the force is 1 % of its peak. Dissipated = work of the end force (trapezoid rule)
+    minus the elastic energy left. The staggered scheme's error is first order in the load
+    increment (measured, P1 h = eps/4: 1.21, 1.11, 1.08 G_f H at du = 2e-3, 1e-3, 5e-4 with
+    coupling = "staggered"; 1.39, 1.20, 1.11 with "paper"), so the run uses
+    coupling = "staggered" and du = DU_BAND (docs/theory.md has the measured numbers)."""
     E, G_f, f_t, eps, length, height = 1.0, 0.1, 1.0, 0.01, 0.1, 0.005
-    h = eps / 4
     peak_u = f_t * length / E
-    du = 5e-4
+    u0, u_end = 0.9 * peak_u, 1.5 * 2 * G_f / f_t
     scene = Scene.from_dict({
         "model": {"kind": "plane_stress"},
         "material": {"E": E, "nu": 0.0, "gamma": G_f, "strength": f_t},
         "phase_field": {"epsilon": eps, "alpha2": 1e-6, "model": "PF-CZM"},
-        "geometry": {"width": length, "height": height, "mesh_size": h},
+        "geometry": {"width": length, "height": height, "mesh_size": eps / 4},
         "loads": [{"boundary": "left", "value": ["0", "0"]},
-                  {"boundary": "right", "value": [f"{0.9 * peak_u} + t", "0"]}],
-        "time": {"dt": du, "t_end": 2.0 * G_f / f_t + 0.1 * peak_u - 0.9 * peak_u + 20 * du},
+                  {"boundary": "right", "value": [f"{u0} + t", "0"]}],
+        "time": {"dt": DU_BAND, "t_end": u_end - u0},
         "adaptivity": {"enabled": False}, "output": {"vtk_every": 0},
-        "discretization": {"order": 1}})
+        "discretization": {"order": 2, "coupling": "staggered"}})
     stepper = PhaseFieldStepper(scene)
     f = stepper.fields
     x = f.nodes.points[:, 0]
-    f.nodes.assign(f.z, 1e-3 * np.exp(-((x - length / 2) / eps) ** 2))
+    f.nodes.assign(f.z, 0.01 * np.exp(-((x - length / 2) / eps) ** 2))
     with stepper.u_problem.static():  # u0 in equilibrium with the seed
         stepper.u_problem.solve("0")
     f.u_prev.vec.data = f.u.vec
-    u0 = 0.9 * peak_u
     displacement, force = [u0], [stepper.forces["Fx_right"]]
-    work_before = 0.5 * u0 * force[0]  # elastic up to u0 (the seed changes it by ~1e-3 %)
-    last = None
+    work_before = 0.5 * u0 * force[0]  # elastic up to u0: the seed softens it by < 1e-3
     for record in stepper.run():
         displacement.append(u0 + record.t)
         force.append(record.forces["Fx_right"])
-        last = record
-    work = work_before + np.trapezoid(force, displacement)
-    dissipated = work - last.E_el
+    dissipated = work_before + np.trapezoid(force, displacement) - record.E_el
     assert max(force) / height == pytest.approx(f_t, rel=0.03)
     assert force[-1] < 0.02 * max(force), "the bar has not failed"
     assert dissipated / (G_f * height) == pytest.approx(1.0, rel=0.05)
