@@ -247,6 +247,7 @@ class PFCZM(CrackModel):
     c_w = math.pi
     z_update = "obstacle"  # the constant source pulls the unconstrained step far below z_old
     quadratic_degradation = False
+    """The rational g: the z-step takes its drive linearized at z_old (``drive_factors``)."""
 
     def __init__(self, young: float, toughness: float, strength: float, epsilon: float,
                  softening: str = "linear") -> None:
