@@ -31,8 +31,8 @@ DU = 0.005
 START = 0.97
 """The bar's end displacement at t = 0 (elastic): the run starts just below the peak."""
 H = 0.05
-DU_BAND = 5e-4
-"""Load increment of the slow band test (L = 0.1: 0.5 % of the length per step)."""
+DU_BAND = 2.5e-4
+"""Load increment of the slow band test (L = 0.1: 0.25 % of the length per step)."""
 
 
 def test_pfczm_is_registered_and_built_from_the_scene():
