@@ -20,7 +20,8 @@ from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .geometry.domains import MeshingError
 from .io.output import OutputError
 from .io.hdf5 import ResultsError
-from .parallel.communicator import ParallelError, launched_rank
+from .parallel.communicator import launched_rank
+from .solve.communicator import ParallelError
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
 

@@ -41,8 +41,9 @@ if TYPE_CHECKING:
     from ..solve.crack_tracking import CrackTracker
     from ..mesh.fields import MeshFields
 
-__all__ = ["SERIAL", "Communicator", "MPICommunicator", "ParallelError", "Serial",
-           "launched_rank", "launched_size", "world", "sum_over_ranks"]
+__all__ = ["MPICommunicator", "launched_rank", "launched_size", "world"]
+# SERIAL, Communicator, ParallelError and Serial are ngfrac.solve.communicator's (imported here
+# for the callers that name them from ngfrac.parallel)
 
 log = logging.getLogger(__name__)
 

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 MODELS = tuple(ELASTIC_MODELS)
 """Model names a scene may choose (``model.kind``)."""
 
-MODELS_3D = ("elasticity_3d",)
+MODELS_3D = tuple(kind for kind, model in ELASTIC_MODELS.items() if model.n_components == 3)
 """Models of a 3D domain (``geometry.kind = "box"``); the others are 2D."""
 
 
@@ -146,7 +146,7 @@ class Model(_Section):
     @property
     def n_components(self) -> int:
         """Components of u: 1 for mode III, 2 for the plane models, 3 in 3D."""
-        return 1 if self.kind == "mode3" else 3 if self.kind in MODELS_3D else 2
+        return ELASTIC_MODELS[self.kind].n_components
 
     def check(self, material: "Material", loads: tuple["Load", ...]) -> None:
         """What spans sections: loads, body force and moduli must fit the model.
