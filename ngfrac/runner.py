@@ -141,13 +141,16 @@ def record_restart(out: Path, scene: Scene, stepper: PhaseFieldStepper,
         old = _flat_keys(tomllib.loads(stored.read_text())) if stored.exists() else None
     except (OSError, tomllib.TOMLDecodeError):
         old = None
-    new = _flat_keys(scene.to_dict())
+    from .io.output import portable_scene_dict
+
+    stored_dict = portable_scene_dict(scene.to_dict(), out)  # the CAD copy by its name
+    new = _flat_keys(stored_dict)
     changed = {} if old is None else {key: [old.get(key), new.get(key)]
                                       for key in sorted(set(old) | set(new))
                                       if old.get(key) != new.get(key)}
     if changed or old is None:
         with manifest.writing("scene.toml") if manifest else contextlib.nullcontext():
-            atomic_write_text(stored, to_toml(scene.to_dict()))
+            atomic_write_text(stored, to_toml(stored_dict))
     info = read_run_json(out) or {"scene": scene.name}
     info.setdefault("restarts", []).append(
         {**run_metadata(), "from_step": int(stepper.k), "from_t": float(stepper.t),

@@ -154,7 +154,7 @@ class ResultsWriter:
         for name in list(f["snapshots"]):
             if int(f["snapshots"][name].attrs["step"]) > step:
                 del f["snapshots"][name]
-        if stored_text != scene_text(scene):  # a longer time.t_end, other [output] keys
+        if stored_text != scene_text(scene, path.parent):  # a longer time.t_end, other [output] keys
             writer.replace_scene(scene)
         f.flush()
         writer.write_xdmf()

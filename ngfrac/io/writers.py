@@ -96,12 +96,20 @@ class RunFolder:
     def create(cls, path: str | Path, scene: Scene, overwrite: bool = False) -> "RunFolder":
         """Prepare ``path`` for a new run of ``scene``: the manifest, ``scene.toml`` and
         ``run.json`` (:func:`~ngfrac.io.output.prepare_output_dir` says what ``overwrite``
-        replaces)."""
+        replaces), and a copy of the scene's CAD file (``geometry.file``), which the stored
+        scene names (:func:`~ngfrac.io.output.copy_cad_file`; its SHA-256 in run.json's
+        ``cad_file``)."""
+        from .output import copy_cad_file, portable_scene_dict
+
         path = Path(path)
         manifest = prepare_output_dir(path, overwrite)
+        cad = copy_cad_file(scene.to_dict(), path, manifest)  # the folder is self-contained
         with manifest.writing("scene.toml"):
-            atomic_write_text(path / "scene.toml", to_toml(scene.to_dict()))
+            atomic_write_text(path / "scene.toml",
+                              to_toml(portable_scene_dict(scene.to_dict(), path)))
         info = run_info(scene)
+        if cad is not None:
+            info["cad_file"] = cad
         write_run_json(path, info, manifest)
         return cls(path, manifest, info, restart=False, overwrite=overwrite)
 
@@ -292,7 +300,7 @@ class VTKSnapshots(Writer):
 
 
 class Checkpoints(Writer):
-    """``checkpoint.h5`` every ``output.checkpoint_every`` steps
+    """``checkpoint.h5`` every ``output.checkpoint_every`` steps and at the end
     (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically).
 
     In an MPI job every rank has one (the fields are gathered to rank 0, which writes the
@@ -305,8 +313,16 @@ class Checkpoints(Writer):
         self.every = scene.output.checkpoint_every
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        if not (self.every and record.step % self.every == 0):
-            return
+        if self.every and record.step % self.every == 0:
+            self._save(stepper)
+
+    def finish(self, stepper: "PhaseFieldStepper") -> None:
+        """One more at the end (unless the last step wrote one), so that a finished run can
+        be extended: ``ngfrac run --restart DIR --set time.t_end=T``."""
+        if self.every and stepper.k % self.every != 0:
+            self._save(stepper)
+
+    def _save(self, stepper: "PhaseFieldStepper") -> None:
         from ..parallel.checkpoints import gather_state
 
         with stepper.timer.phase("output: checkpoint"):
