@@ -141,6 +141,8 @@ def _plot(args: argparse.Namespace) -> int:
     if not (folder / "history.csv").is_file():
         raise OutputError(f"{str(folder)!r} is not a run folder (no history.csv); give the "
                           "--out folder of an ngfrac run")
+    if args.times:
+        _check_plot_times(folder, args.times)
     manifest = Manifest.load(folder) or Manifest.adopt(folder)
     foreign = manifest.foreign("plots/")
     if foreign:
@@ -156,6 +158,24 @@ def _plot(args: argparse.Namespace) -> int:
     for path in written:
         print(path)
     return 0
+
+
+def _check_plot_times(folder: Path, times: list[float]) -> None:
+    """``--times`` within the run's snapshots (a time between two takes the nearest)."""
+    from .io.results import open_results
+
+    if not (folder / "results.h5").is_file():
+        raise OutputError(f"--times: {str(folder)!r} has no results.h5 (output.results = "
+                          "false), so no phase-field pictures; leave out --times")
+    available = open_results(folder / "results.h5").snapshot_times()
+    if not len(available):
+        raise OutputError(f"--times: {str(folder / 'results.h5')!r} holds no snapshot")
+    first, last = float(available.min()), float(available.max())
+    slack = 1e-9 * max(abs(first), abs(last), 1.0)
+    outside = [t for t in times if not first - slack <= t <= last + slack]
+    if outside:
+        raise OutputError(f"--times {outside[0]:g} is outside the run's snapshots "
+                          f"(t = {first:g} to {last:g}); give times in that range")
 
 
 def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:

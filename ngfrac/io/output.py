@@ -278,7 +278,7 @@ class VTKSeries:
 
     Parameters
     ----------
-    folder : Path
+    folder : str or Path
         Where ``fields_00000.vtu``, ... and ``fields.pvd`` go.
     subdivision : int
         Subdivisions per element (order - 1 shows P2 fields faithfully).
@@ -289,8 +289,9 @@ class VTKSeries:
         Warn once when a snapshot's estimated size exceeds this many bytes.
     """
 
-    def __init__(self, folder: Path, subdivision: int, stem: str = "fields",
+    def __init__(self, folder: str | Path, subdivision: int, stem: str = "fields",
                  manifest: Manifest | None = None, large: int = LARGE_SNAPSHOT) -> None:
+        folder = Path(folder)
         self.folder = folder
         self.large = large
         self.subdivision = subdivision

@@ -6,9 +6,11 @@ from the stored arrays, or as plain numpy arrays.
 
 Layout (``format_version`` 1)::
 
-    /                      attrs: format = "ngfrac-results", format_version
+    /                      attrs: format = "ngfrac-results", format_version, units (the
+                           scene's unit system)
     /scene                 the resolved scene as TOML text; attrs: sha256
-    /history               float64 (rows, columns), resizable; attrs: columns
+    /history               float64 (rows, columns), resizable; attrs: columns, units (one
+                           per column)
     /snapshots/00000       attrs: t, step
         mesh/              see :class:`~ngfrac.io.hdf5.MeshArrays` (a hard link to the previous snapshot's
                            mesh group when the mesh did not change)
@@ -19,7 +21,8 @@ Layout (``format_version`` 1)::
 For readers without NGSolve, ``mesh/coordinates`` (nv, dim; attrs: units), ``mesh/cells``
 (triangles or tetrahedra, vertex numbers from 0) and ``vertex_values`` are all a snapshot
 needs (linear per cell); ``results.xdmf`` next to the file lists them for ParaView (XDMF
-reader) as a time series. Lengths are in the scene's units (:data:`~ngfrac.io.hdf5.LENGTH_UNIT`).
+reader) as a time series. The ``units`` attributes name the units of the scene's unit system
+(the top-level key ``units``; "scene units" by default).
 
 Numeric datasets carry Fletcher-32 checksums, so damaged data raises
 :class:`~ngfrac.io.hdf5.ResultsError` instead of being read silently. Meshes, fields and the
@@ -72,7 +75,15 @@ def vertex_values(gf: ngs.GridFunction) -> np.ndarray:
 
 
 FIELD_UNITS = {"u": LENGTH_UNIT, "z": "1"}
-"""The ``units`` attribute of the stored vertex values (other fields: "")."""
+"""The ``units`` attribute of the stored vertex values (other fields: ""); u's is the length
+unit of the scene's ``units`` (:mod:`ngfrac.scene.units`)."""
+
+
+def _column_units(columns: list[str], scene: Scene) -> list[str]:
+    """The ``units`` attribute of /history: one per column (:func:`ngfrac.scene.units.column_units`)."""
+    from ..scene.units import column_units, unit_system
+
+    return column_units(columns, unit_system(scene.units), scene.geometry.dim)
 
 
 # -- writing ----------------------------------------------------------------------------------
@@ -107,16 +118,24 @@ class ResultsWriter:
             raise ResultsError(f"cannot create results file {str(path)!r} ({error_reason(err)})") from None
         f.attrs["format"] = FORMAT
         f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["units"] = scene.units
         write_scene(f, scene)
         # Without given columns the first record names them (its force columns vary by scene).
         n = len(columns) if columns is not None else 0
         history = f.create_dataset("history", shape=(0, n), dtype=np.float64,
                                    maxshape=(None, None), chunks=(64, max(n, 32)), fletcher32=True)
         history.attrs["columns"] = list(columns or [])
+        history.attrs["units"] = _column_units(list(columns or []), scene)
         f.create_group("snapshots")
         f.flush()
         self._attach(path, scene, f)
         self.write_xdmf()  # an index of no snapshots yet: the file exists from the start
+
+    @property
+    def _units(self) -> Any:
+        from ..scene.units import unit_system
+
+        return unit_system(self.scene.units)
 
     def _attach(self, path: Path, scene: Scene, handle: h5py.File) -> None:
         self.path = path
@@ -194,6 +213,7 @@ class ResultsWriter:
                                      "writer was made without columns")
                 self.columns = list(record.header())
                 history.attrs["columns"] = self.columns
+                history.attrs["units"] = _column_units(self.columns, self.scene)
             if len(row) != len(self.columns):
                 raise ValueError(f"history row has {len(row)} values, the table has "
                                  f"{len(self.columns)} columns")
@@ -234,13 +254,15 @@ class ResultsWriter:
             else:
                 arrays.write(group.create_group("mesh"))
             self._last_mesh = (arrays, group["mesh"].name)
+            group["mesh/coordinates"].attrs["units"] = self._units.length
             data = group.create_group("fields")
             at_vertices = group.create_group("vertex_values")
             for field_name, gf in fields.items():
                 StoredField.of(gf).write(data, field_name)
                 dset = at_vertices.create_dataset(field_name, data=vertex_values(gf),
                                                   fletcher32=True)
-                dset.attrs["units"] = FIELD_UNITS.get(field_name, "")
+                dset.attrs["units"] = (self._units.length if field_name == "u"
+                                       else FIELD_UNITS.get(field_name, ""))
             self._file.flush()
         self.write_xdmf()
         return name

@@ -180,6 +180,17 @@ class Writers(Writer):
         self.close()
 
 
+def _times_as_written(record: "StepRecord") -> list[Any]:
+    """The record's row with t and dt to 15 significant digits: t = k tau is a product of
+    floats (0.0009000000000000001 for 9 steps of 1e-4); the nearest 15-digit number is the
+    time the scene meant."""
+    row = list(record.row())
+    for i, name in enumerate(record.header()):
+        if name in ("t", "dt") and isinstance(row[i], float):
+            row[i] = float(f"{row[i]:.15g}")
+    return row
+
+
 class HistoryCSV(Writer):
     """``history.csv``: one row per diagnosed step (a restart keeps the rows up to its step)."""
 
@@ -193,12 +204,12 @@ class HistoryCSV(Writer):
             self.writer = HistoryWriter(self.path, record.header(),
                                         resume_after=stepper.k if self.folder.restart else None)
         if not self.folder.restart:
-            self.writer.write(record.row())
+            self.writer.write(_times_as_written(record))
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if record.has_diagnostics and self.writer is not None:
             with stepper.timer.phase("output: history"):
-                self.writer.write(record.row())
+                self.writer.write(_times_as_written(record))
 
     def finish(self, stepper: "PhaseFieldStepper") -> None:
         self.close()
@@ -446,14 +457,15 @@ class OpeningCSV(Writer):
 
 def write_plots(out: Path, stepper: "PhaseFieldStepper") -> None:
     """history.png, crack.png (z with the tip path) and force_displacement.png (if any)."""
-    plot_history(out / "history.csv", out / "history.png")
+    units = stepper.scene.units
+    plot_history(out / "history.csv", out / "history.png", units)
     history = read_history(out / "history.csv")
     tips = np.column_stack([history[c] for c in ("tip_x", "tip_y", "tip_z") if c in history])
     z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
     plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
                      title=f"{stepper.scene.name}: z at t = {stepper.t:.4g}",
                      path=tips[np.all(np.isfinite(tips), axis=1)])
-    plot_force_displacement(history, out / "force_displacement.png")
+    plot_force_displacement(history, out / "force_displacement.png", units)
 
 
 class Plots(Writer):
