@@ -185,7 +185,13 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
 
 
 def _warn_resolution(scene: Scene, strict: bool) -> None:
-    """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2)."""
+    """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2).
+    Also the rate warning of alpha2 (:func:`ngfrac.scene.rates.rate_warnings`), which
+    --strict leaves a warning (a large alpha2 may be meant: demos/sneddon.toml)."""
+    from .scene.rates import rate_warnings
+
+    for message in rate_warnings(scene) if launched_rank() == 0 else ():
+        print(f"ngfrac: warning: {message}", file=sys.stderr)
     found = resolution_warnings(scene)
     for message in found if launched_rank() == 0 else ():
         print(f"ngfrac: warning: {message}", file=sys.stderr)

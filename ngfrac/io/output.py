@@ -43,7 +43,7 @@ LEGACY = ("history.csv", "scene.toml", "history.png", "crack.png", "results.h5",
 """The files (glob patterns) an ngfrac before manifests wrote. A folder without a manifest
 counts as a run when it holds one of them; ``overwrite`` then removes those files (and
 ``vtk/``, ``plots/`` when they are left empty) and nothing else."""
-OWNED = LEGACY + (RUN_JSON, "crack_path.csv", "results.xdmf")
+OWNED = LEGACY + (RUN_JSON, "crack_path.csv", "results.xdmf", "results_mesh_[0-9][0-9][0-9].xdmf")
 """The names ngfrac writes: a user's file at one of them is never replaced."""
 LEGACY_FOLDERS = ("plots/", "vtk/")
 

@@ -234,6 +234,8 @@ class ResultsH5(Writer):
         with folder.manifest.writing("results.h5", "results.xdmf"):
             self.writer = (ResultsWriter.resume(self.path, self.scene, stepper.k) if folder.restart
                            else ResultsWriter(self.path, self.scene, overwrite=folder.overwrite))
+        self.writer.manifest = folder.manifest  # lists the per-mesh results_mesh_NNN.xdmf
+        self.writer.write_xdmf()
         self.writer.set_attributes(folder.info)
         if not folder.restart:
             self.writer.append(record)

@@ -188,3 +188,21 @@ def test_transfer_warning_says_what_it_measures(caplog):
     (message,) = [r.getMessage() for r in caplog.records]
     assert message.startswith("1 of 2 points lie outside the old mesh; they take the value at "
                               "the nearest old vertex (up to ")
+
+
+# -- item 9: alpha2 ------------------------------------------------------------------------------
+def test_check_warns_when_alpha2_makes_the_run_rate_dependent(capsys):
+    from ngfrac.scene.rates import rate_ratio, suggested_alpha2
+    from ngfrac.testing.scenes import quick_slit
+
+    assert cli.main(["check", SLIT]) == 0
+    assert "alpha2" not in capsys.readouterr().err  # the demo: ratio 0.04
+    assert cli.main(["check", SLIT, "--set", "phase_field.alpha2=1.0", "--strict"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["ngfrac: warning: phase_field.alpha2 = 1: alpha2/dt = 2e+03 is 40 times "
+                   "gamma/epsilon = 50, so z lags the load (rate dependent); for a quasi-static "
+                   "crack keep alpha2/dt well below gamma/epsilon, e.g. alpha2 = 0.00025 (user "
+                   "guide, 'Choosing alpha2')"]
+    scene = quick_slit('material.gamma="1 + 0.5*x"')  # gamma varies: its minimum counts
+    assert rate_ratio(scene) == pytest.approx((1e-3 / 5e-4) / (1.0 / 0.04))
+    assert suggested_alpha2(scene) == pytest.approx(0.01 * 5e-4 * 1.0 / 0.04)
