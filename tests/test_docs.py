@@ -139,7 +139,8 @@ def documented_files() -> dict[str, re.Pattern]:
     patterns = {}
     for row in table_rows(section("### Files in a run folder")):
         for name in re.findall(r"`([^`]+)`", row[0]):
-            regex = re.escape(name).replace("NNNNN", r"\d{5}").replace("<t>", r"[^/]+")
+            regex = (re.escape(name).replace("NNNNN", r"\d{5}").replace("NNN", r"\d{3}")
+                     .replace("<t>", r"[^/]+"))
             patterns[name] = re.compile(regex)
     return patterns
 
@@ -243,8 +244,8 @@ def test_the_built_guide_renders_every_table_row(built_site):
     the reaction columns by name."""
     result, html = built_site
     assert result.returncode == 0, result.stderr
-    raw = {page.name: re.findall(r"<p>\|[^<]*", page.read_text())
-           for page in html.glob("*.html")}
+    raw_row = re.compile(r"(?m)^(?:<p>)?\|[^\n]*\|\s*(?:</p>)?$")  # a line "| a | b |"
+    raw = {page.name: raw_row.findall(page.read_text()) for page in html.glob("*.html")}
     raw = {name: found for name, found in raw.items() if found}
     assert not raw, f"table rows rendered as text: {raw}"
     guide = (html / "user-guide.html").read_text()
