@@ -89,10 +89,27 @@ def _open(scene: Scene, out: Path, overwrite: bool, restart: bool, comm: Communi
         if not path.exists():
             raise OutputError(_no_checkpoint(out))
         stepper = resume(path, scene)
+    _check_cad_copy(out)
     manifest = Manifest.load(out) or Manifest.adopt(out)
     manifest.save()
     info = record_restart(out, scene, stepper, manifest)
     return stepper, RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
+
+
+def _check_cad_copy(out: Path) -> None:
+    """The run folder's copy of the CAD file is the one the run read (run.json's sha256)."""
+    from .io.output import file_sha256
+
+    cad = (read_run_json(out) or {}).get("cad_file")
+    if not isinstance(cad, dict) or not cad.get("name"):
+        return
+    copy = out / str(cad["name"])
+    if not copy.is_file():
+        raise OutputError(f"{str(copy)!r} is missing: the run read its CAD file from there; "
+                          f"copy {cad.get('source')!r} back to it")
+    if file_sha256(copy) != cad.get("sha256"):
+        raise OutputError(f"{str(copy)!r} changed since the run read it (its SHA-256 differs "
+                          "from run.json's cad_file); restore it to continue the run")
 
 
 def _no_checkpoint(out: Path) -> str:
