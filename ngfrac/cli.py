@@ -98,7 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", nargs="?", help="scene file (TOML)")
     run.add_argument("--out", help="output folder (required unless --restart)")
     run.add_argument("--restart", metavar="DIR", help="continue the run in DIR (or DIR/checkpoint.h5) "
-                     "from its last checkpoint; --set may extend time.t_end")
+                     "from its last checkpoint (one is written at the end of every run); --set "
+                     "may extend time.t_end")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set time.t_end=0.05 (repeatable)")
     run.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
