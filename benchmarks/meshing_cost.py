@@ -28,8 +28,9 @@ import numpy as np
 import ngsolve as ngs
 
 from ngfrac.mesh import remesh as meshing
-from ngfrac.mesh.domains import build_mesh
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh, predict_vertices, remesh, sample_size_field
+from ngfrac.geometry.domains import build_mesh
+from ngfrac.fem.elements import ElementGeometry
+from ngfrac.mesh.remesh import adapt_mesh, predict_vertices, remesh, sample_size_field
 from ngfrac.physics.cracks import distance_to_polylines
 from ngfrac.scene import Geometry
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Do two versions of ngfrac compute the same demo histories?  (the redesign's check)
 
-Runs the demos through the command line (``python -m ngfrac run``) with one NGSolve thread
+Runs the demos (AT2 and AT1, mode III, modes I+II, a split, a CAD domain, 3D) through the command line (``python -m ngfrac run``) with one NGSolve thread
 and compares every history column except the timings::
 
     NGFRAC_THREADS=1 python benchmarks/same_histories.py save DIR      # with the old code
@@ -32,13 +32,24 @@ DEMOS = {
     "box3d": QUICK + ["time.dt=0.04", "time.adaptive=false", "adaptivity.max_vertices=1000"],
     "sent": QUICK + ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3",
                      "time.adaptive=false"],
+    "mode3_slit_at1": QUICK + ["time.dt=2e-3"],  # AT1: the obstacle z-step
+    "sens_amor": QUICK + ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=2e-4",
+                          "time.t_end=1.2e-2", "time.adaptive=false", "material.split=amor"],
+    "plate_hole": QUICK + ["phase_field.epsilon=0.015", "discretization.order=1",
+                           "time.dt=1e-4", "time.t_end=1.2e-2", "time.adaptive=false",
+                           "adaptivity.max_vertices=3000"],  # a CAD (OCC) domain
 }
 """The demos of the check and their overrides (the quick modes of tests/demos/test_demos.py)."""
 TIMINGS = {"wall_s", "step_s", "solve_s", "adapt_s"}
 
 
+SCENES = {"sens_amor": "sens"}
+"""Checks that run another demo's scene file (with a split, say)."""
+
+
 def run(name: str, out: Path) -> Path:
-    command = [sys.executable, "-m", "ngfrac", "run", str(ROOT / "demos" / f"{name}.toml"),
+    scene = ROOT / "demos" / f"{SCENES.get(name, name)}.toml"
+    command = [sys.executable, "-m", "ngfrac", "run", str(scene),
                "--out", str(out / name), "--overwrite", "--no-progress", "--no-plots"]
     for value in DEMOS[name]:
         command += ["--set", value]

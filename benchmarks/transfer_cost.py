@@ -17,7 +17,7 @@ import time
 
 import ngsolve as ngs
 
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.geometry.domains import build_mesh
 from ngfrac.mesh.transfer import transfer, transfer_phase_field
 from ngfrac.testing.meshes import UNIT_SQUARE, crack_mesh, profile_field
 

@@ -18,10 +18,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the packages of this checkout, installed or not
 
-from ngfrac.mesh.domains import build_mesh  # noqa: E402
+from ngfrac.geometry.domains import build_mesh  # noqa: E402
 from ngfrac.io.plotting import new_figure  # noqa: E402
 from ngfrac.solve.stepper import PhaseFieldStepper  # noqa: E402
-from ngfrac.post.studies import fit_rate  # noqa: E402
+from ngfrac.studies import fit_rate  # noqa: E402
 from ngfrac.testing.manufactured import u_errors  # noqa: E402
 from ngfrac.testing.scenes import demo_data, quick_slit, scene_from  # noqa: E402
 

@@ -17,9 +17,9 @@ threads of each run, applied by :func:`run_scene` and ``ngfrac run`` when the ru
 by :func:`set_threads` in a script that drives the stepper itself.
 """
 from .environment import set_threads
-from .scene.checks import ResolutionWarning, resolution_warnings
+from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .scene.expressions import Expression, ExpressionError
-from .mesh.domains import MeshingError
+from .geometry.domains import MeshingError
 from .io.output import ngfrac_version as _ngfrac_version
 from .runner import RunSummary, run_scene
 from .scene import Scene, SceneError, load_scene

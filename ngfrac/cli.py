@@ -2,7 +2,7 @@
 ``ngfrac plot DIR`` and ``ngfrac check SCENE.toml``.
 
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
-(:func:`ngfrac.scene.checks.resolution_warnings`) are one line each on stderr; ``--strict`` makes
+(:func:`ngfrac.mesh.resolution.resolution_warnings`) are one line each on stderr; ``--strict`` makes
 them exit 2 before anything is written. A meshing or solver failure during the run exits 3.
 Under ``mpirun -np N`` (N >= 3) the run is distributed (:mod:`ngfrac.parallel`); rank 0 prints.
 ``NGFRAC_THREADS`` caps the threads of a run (applied by :func:`ngfrac.runner.run_scene`).
@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .io.checkpoint import CheckpointError
-from .scene.checks import ResolutionWarning, resolution_warnings
-from .mesh.domains import MeshingError
+from .mesh.resolution import ResolutionWarning, resolution_warnings
+from .geometry.domains import MeshingError
 from .io.output import OutputError
 from .io.hdf5 import ResultsError
 from .parallel.communicator import ParallelError, launched_rank

@@ -33,9 +33,10 @@ from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json,
 from .io.writers import (CHECKPOINT, PLOTS, Checkpoints, GatheredResults, HistoryCSV,
                          RunFolder, VTKSnapshots, Writer, Writers, default_writers, run_info,
                          write_crack_path, write_plots, write_snapshot)
-from .parallel.communicator import SERIAL, Communicator, ParallelError, world
+from .parallel.communicator import world
+from .solve.communicator import SERIAL, Communicator, ParallelError
 from .scene import Scene
-from .scene.checks import ResolutionWarning, resolution_warnings
+from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .solve.stepper import PhaseFieldStepper, StepRecord
 
 __all__ = ["RunSummary", "open_run", "record_restart", "run_scene"]
@@ -122,7 +123,7 @@ def _checkpoint_on_root(path: Path, scene: Scene, comm: Communicator) -> Checkpo
     same error on every rank (one line from rank 0, no Abort)."""
     from .parallel.checkpoints import load_on_root
 
-    if not comm.comm.bcast(path.exists() if comm.is_root else None, root=0):
+    if not comm.broadcast(path.exists() if comm.is_root else None):
         raise OutputError(_no_checkpoint(path.parent))
     return load_on_root(path, scene, comm)
 
@@ -210,7 +211,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     Warns
     -----
     ResolutionWarning
-        One per line of :func:`ngfrac.scene.checks.resolution_warnings` (the mesh or epsilon
+        One per line of :func:`ngfrac.mesh.resolution.resolution_warnings` (the mesh or epsilon
         cannot resolve the crack), before anything is written.
     """
     for message in resolution_warnings(scene):
@@ -228,7 +229,7 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
 
 def _exit_code(error: BaseException) -> int:
     """The exit status of ``ngfrac run`` for an error (an MPI job ends with it)."""
-    from .mesh.domains import MeshingError
+    from .geometry.domains import MeshingError
     from .solve.u_problem import SolverError
 
     if isinstance(error, (SolverError, MeshingError)):

@@ -24,9 +24,9 @@ def pytest_sessionstart(session):
 def one_thread():
     """One NGSolve thread for a module (its worker threads busy-wait: one is faster on a
     shared machine), then the configured count again (NGFRAC_THREADS)."""
-    from ngfrac.solve.threads import serial
+    from ngfrac.fem.threads import single_thread
 
-    with serial():
+    with single_thread():
         yield
 
 

@@ -60,7 +60,7 @@ class MeshArrays:
     geometry_numbers : (len(boundaries),) int32
         The geometry's edge (2D) or face (3D) number of each boundary (edge or face
         descriptor), so that a rebuilt mesh given its geometry again can be curved again
-        (:meth:`ngfrac.mesh.cad.OccDomain.curve`); empty when unknown (files written before).
+        (:meth:`ngfrac.geometry.cad.OccDomain.curve`); empty when unknown (files written before).
     """
 
     coordinates: np.ndarray

@@ -38,7 +38,7 @@ from ..post.crackpath import crack_path_rows, final_ridge
 from ..post.fields import snapshot_fields
 from ..post.pressurized import opening_profile
 from ..scene import Scene
-from ..scene.checks import resolution_warnings
+from ..mesh.resolution import resolution_warnings
 
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper, StepRecord
@@ -336,10 +336,8 @@ class Checkpoints(Writer):
             self._save(stepper)
 
     def _save(self, stepper: "PhaseFieldStepper") -> None:
-        from ..parallel.checkpoints import gather_state
-
         with stepper.timer.phase("output: checkpoint"):
-            state = gather_state(stepper)  # stepper.state(); under MPI collective, on rank 0
+            state = stepper.comm.gather_state(stepper)  # stepper.state(); under MPI collective, on rank 0
             if self.folder is not None:
                 with self.folder.manifest.writing(CHECKPOINT, "checkpoint.tmp"):
                     save_state(state, stepper.scene, self.folder.path / CHECKPOINT)
@@ -383,10 +381,8 @@ class GatheredResults(Writer):
         self.results = _results_h5(folder, scene) if folder is not None else None
 
     def _view(self, stepper: "PhaseFieldStepper") -> Any:
-        from ..parallel.checkpoints import gather_view
-
         with stepper.timer.phase("output: VTK and snapshots"):
-            return gather_view(stepper)
+            return stepper.comm.gather_view(stepper)
 
     def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         snapshot = self.scene.output.results and self.scene.output.vtk_every

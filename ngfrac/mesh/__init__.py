@@ -1,2 +1,2 @@
-"""Meshes: domains (rectangle, box, CAD shapes) and their Netgen geometry, size fields and remeshing under a vertex cap,
-the adapter that owns every mesh change, and the transfer of u and z onto a new mesh."""
+"""Meshes and the fields on them: size fields and remeshing under a vertex cap, the adapter
+that owns every mesh change, the transfer of u and z onto a new mesh, resolution warnings."""

@@ -25,14 +25,15 @@ import ngsolve as ngs
 import estimators
 
 from ..physics.cracks import crack_direction
-from .domains import domain_of
-from .remesh import (MESHING_3D, ElementGeometry, SizeFloor, VertexDensity, adapt_mesh,
-                      edge_numbers, size_field_from_indicator)
-from ..physics.crack_models import crack_model
-from ..solve.nodal import LagrangeNodes
-from ..solve.spaces import MeshFields
+from ..geometry.domains import domain_of
+from ..fem.elements import ElementGeometry, edge_numbers
+from .remesh import MESHING_3D, SizeFloor, VertexDensity, adapt_mesh, size_field_from_indicator
+from ..physics.crack_models import CrackModel
+from ..fem.nodal import LagrangeNodes
+from .fields import MeshFields
 from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 from ..scene import Scene
+from ..scene.build import crack_model_of
 
 log = logging.getLogger(__name__)
 
@@ -141,9 +142,12 @@ class MeshAdapter:
     ----------
     scene : Scene
         Its ``adaptivity`` section and epsilon set the sizes.
+    crack_model : CrackModel, optional
+        The run's crack model (its crack length is checked across a transfer); the scene's
+        ``phase_field.model`` when not given.
     """
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: Scene, crack_model: CrackModel | None = None) -> None:
         self.scene = scene
         self.settings = scene.adaptivity
         self.sizes = AdaptivitySizes.of(scene)
@@ -153,7 +157,7 @@ class MeshAdapter:
         self.achieved: tuple[float, float] | None = None
         self._cache: tuple[ngs.Mesh, ElementGeometry, np.ndarray] | None = None
         self.eta_total = math.nan
-        self.crack_model = crack_model(scene.phase_field.model)
+        self.crack_model = crack_model_of(scene) if crack_model is None else crack_model
         self.adaptations: list[Adaptation] = []
         """The mesh changes so far."""
         self.density = VertexDensity()
@@ -175,8 +179,9 @@ class MeshAdapter:
         interior tip): the crack has cut through, and the tip is no longer chased.
 
         After the cut the farthest cracked node (the tip) jumps along the far edge as z
-        spreads there; chasing it remeshed nearly every step and the tip disc took vertices
-        from the band, which the cap then coarsened (a 0.63 % crack-length loss in one run).
+        spreads there; chasing it would remesh nearly every step and the tip disc would take
+        vertices from the band (a 0.63 % crack-length loss in one run: docs/adaptivity.md, "The
+        tip lane and the tip stop").
         """
         return (self._may_stop_at_boundary and self.last_tip is not None
                 and self._at_boundary(self.last_tip))
@@ -337,7 +342,7 @@ class MeshAdapter:
             ``relax(fields)`` returns z_trial at the nodes after one z-sub-step on the new
             fields (for ``adaptivity.relax_core``).
         solves : callable
-            The context of estimating and remeshing (:class:`ngfrac.solve.threads.ThreadPolicy`).
+            The context of estimating and remeshing (:class:`ngfrac.fem.threads.ThreadPolicy`).
 
         Returns
         -------

@@ -36,7 +36,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from .domains import Domain, MeshingError, domain_of
+from ..fem.elements import ElementGeometry, edge_numbers
+from ..geometry.domains import Domain, MeshingError
 from ..scene import Geometry
 
 log = logging.getLogger(__name__)
@@ -175,53 +176,6 @@ class SizeFloor:
 
 
 @dataclass(frozen=True)
-class ElementGeometry:
-    """Per-element geometry of a simplicial mesh, in NGSolve's element order.
-
-    Attributes
-    ----------
-    vertices : (ne, d+1) int array
-        Vertex numbers (NGSolve's, from 0).
-    coordinates : (nv, d) array
-    centroids : (ne, d) array
-    measures : (ne,) array
-        Areas (2D) or volumes (3D).
-    diameters : (ne,) array
-        Longest edge, the h of the element (Netgen's maxh is a longest edge).
-    radii : (ne,) array
-        Largest distance from the centroid to a vertex.
-    """
-
-    vertices: np.ndarray
-    coordinates: np.ndarray
-    centroids: np.ndarray
-    measures: np.ndarray
-    diameters: np.ndarray
-    radii: np.ndarray
-
-    @property
-    def dim(self) -> int:
-        return self.coordinates.shape[1]
-
-    @classmethod
-    def of(cls, mesh: ngs.Mesh) -> "ElementGeometry":
-        """Read the geometry of the volume elements of ``mesh`` (first order, simplices)."""
-        dim = mesh.dim
-        coords = np.array(mesh.ngmesh.Coordinates())[:, :dim]
-        elements = mesh.ngmesh.Elements2D() if dim == 2 else mesh.ngmesh.Elements3D()
-        vertices = elements.NumPy()["nodes"][:, : dim + 1].astype(int) - 1  # Netgen counts from 1
-        corners = coords[vertices]
-        centroids = corners.mean(axis=1)
-        edges = corners[:, 1:] - corners[:, :1]
-        measures = np.abs(np.linalg.det(edges)) / math.factorial(dim)
-        diameters = np.zeros(len(vertices))
-        for i, j in itertools.combinations(range(dim + 1), 2):
-            np.maximum(diameters, np.linalg.norm(corners[:, i] - corners[:, j], axis=1), out=diameters)
-        radii = np.linalg.norm(corners - centroids[:, None, :], axis=2).max(axis=1)
-        return cls(vertices, coords, centroids, measures, diameters, radii)
-
-
-@dataclass(frozen=True)
 class SizeField:
     """A mesh-size field sampled at points.
 
@@ -296,20 +250,6 @@ def size_field_from_indicator(mesh: ngs.Mesh, eta: np.ndarray, *, target_h: floa
     with np.errstate(divide="ignore"):
         sizes = geom.diameters * (tol / eta) ** (1.0 / p)
     return np.clip(sizes, hmin, hmax)
-
-
-def edge_numbers(edge_vertices: np.ndarray, element_vertices: np.ndarray) -> np.ndarray:
-    """Edge numbers (rows of ``edge_vertices``) of each element's edges, vectorised."""
-    nv = int(max(edge_vertices.max(), element_vertices.max())) + 1
-    keys = np.sort(edge_vertices, axis=1) @ np.array([nv, 1])
-    order = np.argsort(keys)
-    pairs = list(itertools.combinations(range(element_vertices.shape[1]), 2))
-    local = np.stack([np.sort(element_vertices[:, [i, j]], axis=1) @ np.array([nv, 1])
-                      for i, j in pairs], axis=1)
-    found = order[np.searchsorted(keys[order], local)]
-    if not np.array_equal(keys[found], local):
-        raise RuntimeError("an element edge is missing from the edge list")
-    return found
 
 
 def grade_sizes(mesh: ngs.Mesh, sizes: np.ndarray, grading: float = NETGEN_GRADING) -> np.ndarray:
@@ -550,7 +490,7 @@ def remesh(geometry: Geometry | Domain | Any, points: np.ndarray, sizes: np.ndar
     optimize_steps : int, optional
         Netgen's ``optsteps2d`` (``optsteps3d``); default :attr:`MeshingConstants.optimize_steps`.
     max_attempts : int
-        Generations before giving up with a :class:`~ngfrac.mesh.domains.MeshingError`.
+        Generations before giving up with a :class:`~ngfrac.geometry.domains.MeshingError`.
     density : VertexDensity, optional
         The run's learned vertex-count constant: used for the prediction and updated with the
         mesh made. Without it every call starts from the dimension's default.

@@ -35,9 +35,9 @@ import numpy as np
 import ngsolve as ngs
 from scipy.spatial import cKDTree
 
-from ..physics.crack_models import AT2, CrackModel
-from ..solve.nodal import LagrangeNodes
-from ..solve.threads import integrate, parallel
+from ..physics.crack_models import CrackModel
+from ..fem.nodal import LagrangeNodes
+from ..fem.threads import integrate, threaded
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +63,7 @@ def transfer(gf_old: ngs.GridFunction, fes_new: ngs.FESpace,
     """
     gf_new = ngs.GridFunction(fes_new, gf_old.name)
     if method == "set":
-        with parallel():
+        with threaded():
             gf_new.Set(gf_old)
     elif method == "nodes":
         nodes = LagrangeNodes(fes_new)
@@ -143,7 +143,7 @@ def transfer_phase_field(z_old: ngs.GridFunction, bound_old: ngs.GridFunction,
     return z_new, bound_new
 
 
-def crack_length(z: ngs.GridFunction, epsilon: float, crack_model: CrackModel | None = None) -> float:
+def crack_length(z: ngs.GridFunction, epsilon: float, crack_model: CrackModel) -> float:
     """The Gamma-limit crack length ``int w dx``, ``w`` the crack model's surface density
     (AT2's ``1/2 (eps |grad z|^2 + z^2 / eps)`` by default)."""
-    return integrate((crack_model or AT2()).surface_density(z, epsilon), z.space.mesh)
+    return integrate(crack_model.surface_density(z, epsilon), z.space.mesh)

@@ -27,12 +27,19 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol
 import numpy as np
 import ngsolve as ngs
 
+from ..fem.ranks import sum_over_ranks
+from ..solve.communicator import SERIAL, Communicator, ParallelError, Serial
+
 if TYPE_CHECKING:
     from ..mesh.adapter import MeshAdapter
+    from ..physics.crack_models import CrackModel
+    from ..solve.state import StepperState
+    from ..solve.stepper import PhaseFieldStepper
+    from .checkpoints import RootView
     from ..post.crackset import CrackSet
     from ..scene import Scene
     from ..solve.crack_tracking import CrackTracker
-    from ..solve.spaces import MeshFields
+    from ..mesh.fields import MeshFields
 
 __all__ = ["SERIAL", "Communicator", "MPICommunicator", "ParallelError", "Serial",
            "launched_rank", "launched_size", "world", "sum_over_ranks"]
@@ -43,79 +50,6 @@ LAUNCHER_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE")
 """Environment variables a launcher sets to the job's size (Open MPI; MPICH, Intel MPI, srun)."""
 Z_PRECONDITIONERS = ("local", "bddc")
 """Preconditioners of the z-CG on distributed matrices: ``"local"`` is Jacobi."""
-
-
-class ParallelError(RuntimeError):
-    """A scene or a launch that cannot run distributed (yet); the message says what to do."""
-
-
-class Communicator(Protocol):
-    """What the stepper and its sub-problems ask of the processes of a run."""
-
-    size: int
-    rank: int
-    is_root: bool
-    distributed: bool
-
-    def check(self, scene: "Scene") -> None: ...
-    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
-    def u_solver(self, solver: str) -> str: ...
-    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter": ...
-    def max(self, value: float) -> float: ...
-    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet": ...
-    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]: ...
-    def counts(self, fields: "MeshFields") -> tuple[int, int]: ...
-    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager: ...
-
-
-class Serial:
-    """One process: every answer is the serial code path."""
-
-    size = 1
-    rank = 0
-    is_root = True
-    distributed = False
-
-    def check(self, scene: "Scene") -> None:
-        """Nothing to refuse: every scene runs on one process."""
-
-    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
-        """The mesh ``build()`` makes."""
-        return build()
-
-    def u_solver(self, solver: str) -> str:
-        """The scene's ``discretization.u_solver``."""
-        return solver
-
-    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter":
-        """The adapter of an adaptive scene: :class:`~ngfrac.mesh.adapter.MeshAdapter`."""
-        from ..mesh.adapter import MeshAdapter
-
-        return MeshAdapter(scene)
-
-    def max(self, value: float) -> float:
-        return value
-
-    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet":
-        """The tracker's crack set of the fields' z."""
-        return tracker.crack(fields)
-
-    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]:
-        """The smallest and the largest element diameter."""
-        sizes = tracker.element_sizes(fields)
-        return float(sizes.min()), float(sizes.max())
-
-    def counts(self, fields: "MeshFields") -> tuple[int, int]:
-        """Vertices of the mesh and unknowns of u and z."""
-        return fields.mesh.nv, fields.ndof
-
-    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager:
-        """Errors propagate as they are."""
-        return contextlib.nullcontext()
-
-
-SERIAL = Serial()
-"""The communicator of a run on one process."""
 
 
 def launched_size() -> int:
@@ -142,17 +76,6 @@ def world() -> "Communicator":
     if launched_size() <= 1:
         return SERIAL
     return MPICommunicator()
-
-
-def sum_over_ranks(mesh: ngs.Mesh, values: list[float]) -> list[float]:
-    """The sums over the ranks of ``mesh``'s communicator of per-rank ``values``; the same
-    on every rank (each rank's values gathered and summed with :func:`math.fsum` in rank
-    order). ``values`` unchanged on one process."""
-    comm = mesh.comm
-    if comm.size == 1:
-        return values
-    gathered = comm.mpi4py.allgather(values)
-    return [math.fsum(rank_values[i] for rank_values in gathered) for i in range(len(values))]
 
 
 class MPICommunicator:
@@ -189,7 +112,7 @@ class MPICommunicator:
                                "holds no elements; run mpirun -np 3 (or more), or run serially")
         self._serial_ngmesh: Any = None
         self._nv = 0
-        self._mirror: _RootMirror | None = None
+        self._mirror: _RootNodes | None = None
         self._copy: Any = None
         self._warned_p1 = False
 
@@ -238,22 +161,22 @@ class MPICommunicator:
         elsewhere)."""
         return self._serial_ngmesh
 
-    def serial_copy(self, scene: "Scene") -> Any:
+    def root_copy(self, scene: "Scene") -> Any:
         """Rank 0's serial copy of the run's fields
-        (:class:`~ngfrac.parallel.adaptivity.SerialCopy`), one per communicator and scene:
+        (:class:`~ngfrac.parallel.adaptivity.RootCopy`), one per communicator and scene:
         mesh changes and checkpoints share its dof matching."""
-        from .adaptivity import SerialCopy
+        from .adaptivity import RootCopy
 
         if self._copy is None or self._copy.scene is not scene:
-            self._copy = SerialCopy(scene, self)
+            self._copy = RootCopy(scene, self)
         return self._copy
 
-    def mesh_adapter(self, scene: "Scene") -> "MeshAdapter":
+    def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter":
         """A :class:`~ngfrac.parallel.adaptivity.DistributedMeshAdapter`: the serial
         adapter on rank 0, on a copy of the fields gathered there."""
         from .adaptivity import DistributedMeshAdapter
 
-        return DistributedMeshAdapter(scene, self)
+        return DistributedMeshAdapter(scene, self, crack_model)
 
     def u_solver(self, solver: str) -> str:
         """CG with BDDC: a sparse direct solve of a distributed matrix is not in the wheel."""
@@ -263,6 +186,30 @@ class MPICommunicator:
         return "cg"
 
     # -- reductions -----------------------------------------------------------------------------
+    def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState | None":
+        """The stepper's state on rank 0's serial mesh, None on the other ranks. Collective."""
+        from .checkpoints import gather_state
+
+        return gather_state(stepper)
+
+    def gather_view(self, stepper: "PhaseFieldStepper") -> "RootView | None":
+        """u and z gathered to rank 0's serial mesh, None on the other ranks. Collective."""
+        from .checkpoints import gather_view
+
+        return gather_view(stepper)
+
+    def broadcast(self, value: Any) -> Any:
+        """Rank 0's ``value`` on every rank. Collective."""
+        return self.comm.bcast(value, root=0)
+
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any:
+        """The z-system of a distributed mesh: ``integrand`` as one form with this
+        communicator's preconditioner, solved by CG
+        (:class:`~ngfrac.parallel.z_system.DistributedSystem`)."""
+        from .z_system import DistributedSystem
+
+        return DistributedSystem(fes, integrand, self.z_preconditioner)
+
     def barrier(self) -> None:
         """Wait for every rank."""
         self.comm.Barrier()
@@ -276,7 +223,7 @@ class MPICommunicator:
         return self._nv, fields.fes_u.ndofglobal + fields.fes_z.ndofglobal
 
     # -- the crack, on rank 0 -------------------------------------------------------------------
-    def _gathered(self, fields: "MeshFields") -> "_RootMirror | None":
+    def _gathered(self, fields: "MeshFields") -> "_RootNodes | None":
         """z at the nodes of every rank, put on rank 0's whole mesh (None elsewhere)."""
         new_mesh = self._mirror is None or self._mirror.fields is not fields
         values = fields.z_values()
@@ -284,10 +231,10 @@ class MPICommunicator:
         gathered = self.comm.gather(payload, root=0)
         if not self.is_root:
             if new_mesh:
-                self._mirror = _RootMirror.remote(fields)
+                self._mirror = _RootNodes.remote(fields)
             return None
         if new_mesh:
-            self._mirror = _RootMirror(self._serial_ngmesh, fields, [p for p, _ in gathered])
+            self._mirror = _RootNodes(self._serial_ngmesh, fields, [p for p, _ in gathered])
             gathered = [v for _, v in gathered]
         self._mirror.set(gathered)
         return self._mirror
@@ -329,7 +276,7 @@ class MPICommunicator:
             os._exit(code)  # Abort may return before the launcher ends this process
 
 
-class _RootMirror:
+class _RootNodes:
     """On rank 0: the undistributed mesh with z's Lagrange nodes, and z gathered onto them.
 
     The crack tracker works on it as on serial fields (``mesh``, ``nodes``, ``z_values()``).
@@ -340,7 +287,7 @@ class _RootMirror:
     def __init__(self, ngmesh: Any, fields: "MeshFields", points: list[np.ndarray]) -> None:
         from scipy.spatial import cKDTree
 
-        from ..solve.nodal import LagrangeNodes
+        from ..fem.nodal import LagrangeNodes
 
         self.fields = fields
         self.mesh = ngs.Mesh(ngmesh.Copy())
@@ -363,7 +310,7 @@ class _RootMirror:
         self._values = np.zeros(self.nodes.n_nodes)
 
     @classmethod
-    def remote(cls, fields: "MeshFields") -> "_RootMirror":
+    def remote(cls, fields: "MeshFields") -> "_RootNodes":
         """On the other ranks: only which fields were sent."""
         mirror = cls.__new__(cls)
         mirror.fields = fields

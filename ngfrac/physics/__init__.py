@@ -1,2 +1,3 @@
-"""The model: elastic models (mode III, plane strain and stress, 3D), crack models (AT2, AT1),
+"""The model, each owning its mathematics: elastic models (mode III, plane strain and stress,
+3D), crack models (AT2, AT1),
 tension/compression splits, and the initial cracks (distance, optimal profile, direction)."""

@@ -1,7 +1,9 @@
 """Crack models: the phase-field functional in one object (``phase_field.model``).
 
-Both models share the degradation ``g(z) = (1 - z)^2 + eta`` of the elastic energy and differ
-in the surface term ``gamma w(z, grad z)``:
+A crack model owns its mathematics: the degradation g(z) of the elastic energy and what the
+z-sub-step needs of it (:meth:`CrackModel.drive_factors`), the surface density and its
+constant, the z-forms, the optimal profile. AT2 and AT1 share ``g(z) = (1 - z)^2 + eta``
+and differ in the surface term ``gamma w(z, grad z)``:
 
 - ``AT2`` (the paper's, Ambrosio-Tortorelli): ``w = 1/2 (eps |grad z|^2 + z^2/eps)``; optimal
   profile ``exp(-d/eps)``; no elastic threshold (damage at any load);
@@ -19,6 +21,12 @@ is linear for both: ``a(zt, v) = (alpha2/dt) (zt, v) + K(zt, v) + (W zt, v)`` wi
 :meth:`CrackModel.source`. AT1's ``z/eps`` term is a constant source (``-3 gamma/(8 eps)``):
 below the threshold zt < z_old and the bound ``z = max(zt, z_old)`` keeps z as it was, which
 is what makes the elastic phase (the paper's scheme needs nothing else).
+
+A model with another degradation (``quadratic_degradation = False``) gives g, g' and g''; the
+drive ``-1/2 g'(zt) W`` of its z-sub-step is linearized at z_old,
+``-1/2 g'(z_old) - 1/2 g''(z_old)^+ (zt - z_old)`` (the curvature's positive part implicit,
+so the z-matrix stays symmetric positive definite): one linear solve per step, as the
+paper's scheme, exact where g is quadratic.
 """
 from __future__ import annotations
 
@@ -51,6 +59,10 @@ class CrackModel:
     name = ""
     c_w = math.nan
     z_update = "projection"
+    quadratic_degradation = True
+    """g(z) = (1 - z)^2 + eta: the z-step's drive is exactly ``W (1 - zt)`` (the paper's), and
+    with w at most quadratic in z every form and energy is a polynomial of the degree
+    :func:`ngfrac.fem.quadrature.quadrature_order` integrates exactly on affine elements."""
 
     def resolve_z_update(self, requested: str) -> str:
         """The z-update a run uses for ``discretization.z_update = requested`` (``"auto"``:
@@ -61,6 +73,28 @@ class CrackModel:
         """``g(z) = (1 - z)^2 + eta``, the factor of the elastic energy (z a
         CoefficientFunction or a number)."""
         return (1 - z) ** 2 + eta
+
+    def degradation_slope(self, z: Any) -> Any:
+        """g'(z) (``-2 (1 - z)``)."""
+        return -2 * (1 - z)
+
+    def degradation_curvature(self, z: Any) -> Any:
+        """g''(z) (``2``)."""
+        return 2.0 + 0 * z
+
+    def drive_factors(self, z_old: Any) -> tuple[Any, Any] | None:
+        """The z-sub-step's elastic drive ``-1/2 g'(zt) W`` as ``W (explicit - implicit zt)``.
+
+        Returns (implicit, explicit), CoefficientFunctions of ``z_old`` with implicit >= 0,
+        from the linearization at z_old (module docstring); None for the quadratic g, whose
+        drive is ``W (1 - zt)`` exactly (implicit = explicit = 1: the z-step then builds its
+        right-hand side from the drive matrix, :mod:`ngfrac.solve.z_problem`).
+        """
+        if self.quadratic_degradation:
+            return None
+        curvature = 0.5 * self.degradation_curvature(z_old)
+        implicit = ngs.IfPos(curvature, curvature, 0.0)
+        return implicit, -0.5 * self.degradation_slope(z_old) + implicit * z_old
 
     def surface_density(self, z: Any, epsilon: float) -> ngs.CoefficientFunction:
         """``w(z, grad z)``: its integral is the crack length (the Gamma-limit), and

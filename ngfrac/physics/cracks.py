@@ -98,7 +98,7 @@ def initial_tip(crack: Sequence[Sequence[float]],
     crack : polyline (2D) or planar polygon (3D)
     on_boundary : callable, optional
         Whether a point lies on the domain boundary, e.g.
-        :meth:`ngfrac.mesh.domains.Domain.on_boundary`; asked at each edge's midpoint (3D).
+        :meth:`ngfrac.geometry.domains.Domain.on_boundary`; asked at each edge's midpoint (3D).
 
     Returns
     -------

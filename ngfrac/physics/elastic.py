@@ -1,7 +1,8 @@
 """The elastic part of the models: spaces, sigma[u]:e[v], Dirichlet data, body force.
 
-Each model gives the phase-field stepper what it needs about u; the fracture part (z, the
-surface energy) is the same for all models and lives in the stepper. The interface:
+Each model gives the phase-field stepper what it needs about u; the fracture part (the
+degradation, the surface energy) is the crack model's (:mod:`ngfrac.physics.crack_models`).
+The interface:
 
 - ``space(mesh, order, loads)``: the u-space, Dirichlet where (and in the components where)
   a load prescribes u;
@@ -17,12 +18,27 @@ act on the boundary undegraded (the crack is inside).
 """
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Any, Protocol, Sequence
 
 import ngsolve as ngs
 
-from ..scene.expressions import Expression
-from ..scene import Components, Load, Material, Scene
+
+class Load(Protocol):
+    """What a model reads of a load (a scene's ``[[loads]]`` entry, :class:`ngfrac.scene.Load`):
+    ``value`` is an expression (``to_coefficient(t)``) or, for a vector, a tuple of them
+    whose ``free`` flags the components left free."""
+
+    boundary: str
+    kind: str
+    value: Any
+    is_dirichlet: bool
+    free: tuple[bool, ...]
+
+
+class Material(Protocol):
+    """What a model reads of the material: its body force (an expression, or a tuple of them)."""
+
+    body_force: Any
 
 
 class ElasticModel(Protocol):
@@ -32,21 +48,22 @@ class ElasticModel(Protocol):
     n_components: int
     component_names: tuple[str, ...]
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace: ...
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace: ...
     def stress_strain(self, u: Any, v: Any) -> Any: ...
     def energy_density(self, u: Any) -> Any: ...
-    def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any: ...
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any: ...
     def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None: ...
     def body_force(self, material: Material, t: ngs.Parameter) -> Any | None: ...
-    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
                        v: Any) -> Any | None: ...
 
 
-def _is_zero(expression: Expression | str) -> bool:
-    return isinstance(expression, Expression) and expression.is_constant and expression.value() == 0
+def _is_zero(expression: Any) -> bool:
+    """An expression that is the constant 0 (``"free"`` and other strings are not)."""
+    return bool(getattr(expression, "is_constant", False)) and expression.value() == 0
 
 
-def dirichlet_loads(loads: tuple[Load, ...]) -> tuple[Load, ...]:
+def dirichlet_loads(loads: Sequence[Load]) -> Sequence[Load]:
     """The loads that prescribe u (``kind = "displacement"``)."""
     return tuple(load for load in loads if load.is_dirichlet)
 
@@ -55,12 +72,12 @@ def traction_of(load: Load, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
     """The traction sigma n a Neumann load prescribes: its value, or -p n for a pressure."""
     if load.kind == "pressure":
         return -load.value.to_coefficient(t) * ngs.specialcf.normal(mesh.dim)
-    if isinstance(load.value, Components):
+    if isinstance(load.value, tuple):  # one expression per component
         return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in load.value))
     return load.value.to_coefficient(t)
 
 
-def boundary_work(mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter, v: Any) -> Any | None:
+def boundary_work(mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter, v: Any) -> Any | None:
     """``sum over Neumann loads of int_Gamma traction . v ds``, or None without any."""
     def dot(traction: Any) -> Any:
         return traction * v if v.dim == 1 else ngs.InnerProduct(traction, v)
@@ -87,7 +104,12 @@ class AntiPlane:
     def __init__(self, mu: float) -> None:
         self.mu = mu
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
+    @classmethod
+    def of(cls, material: Any) -> "AntiPlane":
+        """The model of a scene's material (its shear modulus)."""
+        return cls(material.shear_modulus)
+
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace:
         """The displacement space, Dirichlet on every loaded boundary."""
         return ngs.H1(mesh, order=order,
                       dirichlet="|".join(load.boundary for load in dirichlet_loads(loads)))
@@ -104,7 +126,7 @@ class AntiPlane:
         """The shear stress vector (sigma_xz, sigma_yz) = mu grad u of the sound material."""
         return self.mu * ngs.grad(u)
 
-    def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any:
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any:
         """One CoefficientFunction with each load's expression on its boundary."""
         return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t)
                                 for load in dirichlet_loads(loads)}, default=0)
@@ -118,7 +140,7 @@ class AntiPlane:
         force = material.body_force
         return None if _is_zero(force) else force.to_coefficient(t)
 
-    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
                        v: Any) -> Any | None:
         """``int_Gamma tau v ds`` of the traction loads (tau = sigma_zn), or None."""
         return boundary_work(mesh, loads, t, v)
@@ -137,12 +159,41 @@ class Elasticity:
 
     name = "elasticity"
     COMPONENTS = ("x", "y", "z")
+    bulk_dim = 3
+    """The dimension of the strain whose trace and deviator a split takes: 3 (plane strain has
+    e_zz = 0 in a 3D strain), 2 in plane stress."""
 
     def __init__(self, lam: float, mu: float, dim: int = 2) -> None:
         self.lam, self.mu, self.n_components = lam, mu, dim
+        self.lam_3d = lam
+        """The 3D Lame constant lam (plane stress: ``lam`` is the effective lam*)."""
         self.component_names = self.COMPONENTS[:dim]
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: tuple[Load, ...]) -> ngs.FESpace:
+    @classmethod
+    def of(cls, material: Any) -> "Elasticity":
+        """The model of a scene's material (its 3D Lame constants)."""
+        return cls(*material.lame)
+
+    @property
+    def poisson_ratio(self) -> float:
+        """nu of the 3D material, ``lam/(2 (lam + mu))``."""
+        return self.lam_3d / (2 * (self.lam_3d + self.mu))
+
+    @property
+    def kolosov(self) -> float:
+        """Kolosov's constant kappa: ``3 - 4 nu`` (plane strain, 3D), ``(3 - nu)/(1 + nu)``
+        (plane stress); the LEFM modulus is ``E' = 8 mu / (kappa + 1)``."""
+        nu = self.poisson_ratio
+        return (3 - nu) / (1 + nu) if self.name == "plane_stress" else 3 - 4 * nu
+
+    def out_of_plane_stress(self, stress: Any) -> Any:
+        """sigma_zz of a plane model from its in-plane stress: ``nu (sxx + syy)`` in plane
+        strain, 0 in plane stress."""
+        if self.name == "plane_strain":
+            return self.poisson_ratio * (stress[0, 0] + stress[1, 1])
+        return 0.0
+
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace:
         """VectorH1, Dirichlet in component i on the boundaries whose load gives that component."""
         flags = {f"dirichlet{c}": "|".join(load.boundary for load in dirichlet_loads(loads)
                                            if not load.free[i])
@@ -167,10 +218,10 @@ class Elasticity:
         e = self.strain(u)
         return 2 * self.mu * e + self.lam * ngs.Trace(e) * ngs.Id(self.n_components)
 
-    def boundary_values(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter) -> Any:
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any:
         """One vector CoefficientFunction with each load's components on its boundary
         (0 in free components, which :meth:`set_boundary` never reads)."""
-        def vector(value: Components) -> Any:
+        def vector(value: Any) -> Any:
             return ngs.CoefficientFunction(tuple(
                 0.0 if free else entry.to_coefficient(t) for entry, free in zip(value, value.free)))
 
@@ -189,13 +240,13 @@ class Elasticity:
     def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
         """f = [fx, fy] (3D: [fx, fy, fz]) as a vector CoefficientFunction, or None when zero."""
         force = material.body_force
-        if not isinstance(force, Components):
+        if not isinstance(force, tuple):
             return None  # a scalar body force is only allowed when it is 0 (Model.check)
         if all(_is_zero(entry) for entry in force):
             return None
         return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in force))
 
-    def boundary_force(self, mesh: ngs.Mesh, loads: tuple[Load, ...], t: ngs.Parameter,
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
                        v: Any) -> Any | None:
         """``int_Gamma t.v ds`` of the traction and pressure loads (t = -p n), or None."""
         return boundary_work(mesh, loads, t, v)
@@ -220,6 +271,7 @@ class PlaneStress(Elasticity):
     """
 
     name = "plane_stress"
+    bulk_dim = 2
 
     def __init__(self, lam: float, mu: float) -> None:
         super().__init__(2 * lam * mu / (lam + 2 * mu), mu, dim=2)
@@ -244,16 +296,7 @@ class Elasticity3D(Elasticity):
         super().__init__(lam, mu, dim=3)
 
 
-def make_model(scene: Scene) -> AntiPlane | Elasticity:
-    """The elastic model the scene asks for (checks that loads and moduli fit it)."""
-    scene.model.check(scene.material, scene.loads)
-    kind = scene.model.kind
-    if kind == "mode3":
-        return AntiPlane(scene.material.shear_modulus)
-    if kind == "plane_strain":
-        return PlaneStrain(*scene.material.lame)
-    if kind == "plane_stress":
-        return PlaneStress(*scene.material.lame)
-    if kind == "elasticity_3d":
-        return Elasticity3D(*scene.material.lame)
-    raise ValueError(f"model {kind!r} is not implemented")  # scene validation prevents this
+ELASTIC_MODELS: dict[str, type[AntiPlane] | type[Elasticity]] = {
+    "mode3": AntiPlane, "plane_strain": PlaneStrain, "plane_stress": PlaneStress,
+    "elasticity_3d": Elasticity3D}
+"""The values of ``model.kind``: each class builds itself from a scene's material (``of``)."""

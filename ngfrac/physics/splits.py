@@ -3,8 +3,8 @@
 The paper's model degrades all of the elastic energy, so compression also drives z. A split
 writes the energy density psi = 1/2 sigma:e as psi+ + psi- and degrades only psi+::
 
-    E_el = int ((1 - z)^2 + eta) psi+(e[u]) + psi-(e[u])
-    alpha2 dz/dt = ( eps div(gamma grad z) - gamma z/eps + 2 psi+(e[u]) (1 - z) )_+
+    E_el = int g(z) psi+(e[u]) + psi-(e[u])      (g the crack model's degradation)
+    alpha2 dz/dt = ( eps div(gamma grad z) - gamma z/eps - g'(z) psi+(e[u]) )_+
 
 (with no split 2 psi+ = sigma:e, the paper's model). The splits (``material.split``):
 
@@ -64,8 +64,6 @@ from typing import Any, Callable, Iterator
 import ngsolve as ngs
 import numpy as np
 
-from ..solve.linear import UOperator, iterations as solver_iterations
-from ..solve.threads import integrate, parallel, serial
 
 log = logging.getLogger(__name__)
 
@@ -204,10 +202,10 @@ class EnergySplit:
             return 0.5 * bulk * _negative(ngs.Trace(e)) ** 2
         return self.psi(e) - self.psi_plus(e)
 
-    def tangent(self, u_now: Any, u: Any, v: Any, z: Any, eta: float) -> Any:
-        """The second derivative of ``((1-z)^2 + eta) psi+ + psi-`` at ``u_now`` (a
-        GridFunction), applied to the trial ``u`` and test ``v``: the Newton matrix's integrand.
-        """
+    def tangent(self, u_now: Any, u: Any, v: Any, degradation: Any) -> Any:
+        """The second derivative of ``g psi+ + psi-`` at ``u_now`` (a GridFunction), applied to
+        the trial ``u`` and test ``v``: the Newton matrix's integrand; ``degradation`` is g(z)
+        (the crack model's, residual stiffness included)."""
         e = ngs.Sym(ngs.grad(u_now))
         h, k = ngs.Sym(ngs.grad(u)), ngs.Sym(ngs.grad(v))
         tr, trh, trk = ngs.Trace(e), ngs.Trace(h), ngs.Trace(k)
@@ -230,24 +228,24 @@ class EnergySplit:
             cross = 0.5 * dev_hk - 0.25 * ngs.InnerProduct(d1, h) * ngs.InnerProduct(d1, k)
             one_positive = (2 * ngs.InnerProduct(p1, h) * ngs.InnerProduct(p1, k)
                             + 4 * e1 / gap * cross)
-            # the branches select coefficients, never trial or test functions (IfPos around
-            # them: 13.3 s against 6.6 s per assembly at 6,000 dofs, before Compile below)
+            # the branches select coefficients, never trial or test functions (cheaper to
+            # assemble: docs/benchmarks.md, "Assembling a split's tangent")
             both = ngs.IfPos(e2, 1.0, 0.0)
             mixed = ngs.IfPos(e2, 0.0, ngs.IfPos(e1, 1.0, 0.0))
             squares = both * 2 * ngs.InnerProduct(h, k) + mixed * one_positive
             plus = self.lam * tension * trh * trk + self.mu * squares
         # Compile() shares the coefficient subexpressions between the trial and test
-        # derivatives NGSolve takes: 0.29 s against 6.6 s per assembly (Miehe, 6,000 dofs)
-        return (((1 - z) ** 2 + eta) * plus + (full - plus)).Compile()
+        # derivatives NGSolve takes (docs/benchmarks.md, "Assembling a split's tangent")
+        return (degradation * plus + (full - plus)).Compile()
 
     def drive(self, u: Any) -> Any:
         """2 psi+(e[u]), what drives z (sigma:e without a split)."""
         return (2 * self.psi_plus(ngs.Sym(ngs.grad(u)))).Compile()
 
-    def elastic_density(self, u: Any, z: Any, eta: float) -> Any:
-        """``((1-z)^2 + eta) psi+ + psi-`` at u, the integrand of E_el."""
+    def elastic_density(self, u: Any, degradation: Any) -> Any:
+        """``g psi+ + psi-`` at u, the integrand of E_el (``degradation`` is g(z))."""
         e = ngs.Sym(ngs.grad(u))
-        return (((1 - z) ** 2 + eta) * self.psi_plus(e) + self.psi_minus(e)).Compile()
+        return (degradation * self.psi_plus(e) + self.psi_minus(e)).Compile()
 
 
 @contextmanager
@@ -279,109 +277,4 @@ def make_split(model: Any, kind: str) -> EnergySplit | None:
     if model.n_components == 1:
         raise ValueError(f"material.split = {kind!r} needs a plane or 3D model (model.kind); "
                          "mode III has no tension or compression: use split = 'none'")
-    bulk_dim = 2 if model.name == "plane_stress" else 3
-    return EnergySplit(kind, model.lam, model.mu, model.n_components, bulk_dim)
-
-
-@dataclass
-class NewtonResult:
-    """Iterations and the relative residuals of one solve: ``|r|/|H u|`` on the free dofs at each
-    iterate (H u holds the reactions on the Dirichlet dofs, the natural scale)."""
-
-    iterations: int
-    residuals: list[float] = field(default_factory=list)
-
-
-class NewtonSolver:
-    """Minimizes ``E(u) = int energy(u) - <rhs, u>`` over the free dofs of u (u keeps its
-    Dirichlet values), for an energy that is convex and homogeneous of degree 2, so that its
-    gradient is ``H(u) u``.
-
-    Parameters
-    ----------
-    a : ngsolve.BilinearForm
-        The tangent H at the GridFunction ``u`` (its integrand refers to ``u``); after each
-        :meth:`solve` ``a.mat`` is the tangent at the solution.
-    u : ngsolve.GridFunction
-        The unknown, with its Dirichlet values set.
-    energy : ngsolve.CoefficientFunction
-        The energy density at ``u`` (for the line search).
-    order : int
-        Integration order of the energy.
-    freedofs : ngsolve.BitArray
-        Dofs to solve for.
-    inverse : str
-        Solver for the Newton systems, a ``discretization.u_solver`` (H is symmetric positive
-        definite: the energy is convex and the residual stiffness keeps it strictly so).
-    rtol : float
-        Stop when the residual on the free dofs is at most ``rtol |H u|`` (checked before a
-        Newton system is solved, so a converged iterate costs one assembly).
-    max_iterations : int
-        More Newton steps than this raise RuntimeError.
-    preconditioner : ngsolve.Preconditioner, optional
-        Registered with ``a`` before its first assembly; needed for ``inverse = "cg"``.
-    solves : callable, optional
-        Returns the context of factorizations and solves (default :func:`ngfrac.solve.threads.serial`,
-        bitwise reproducible).
-    """
-
-    def __init__(self, a: ngs.BilinearForm, u: ngs.GridFunction, energy: Any, order: int,
-                 freedofs: ngs.BitArray, inverse: str = "sparsecholesky", rtol: float = 1e-10,
-                 max_iterations: int = 30, preconditioner: Any = None,
-                 solves: Callable[[], AbstractContextManager] = serial) -> None:
-        self.a, self.u, self.energy, self.order = a, u, energy, order
-        self.solves = solves
-        self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
-        self._free = np.array(freedofs, dtype=bool)  # element by element: once, not per solve
-        self.rtol, self.max_iterations = rtol, max_iterations
-        self._operator = UOperator(a, freedofs, inverse, preconditioner)
-        self.last: NewtonResult | None = None
-        """The result of the last :meth:`solve`."""
-
-    def _factorize(self) -> Any:
-        return self._operator.factorize()
-
-    def total_energy(self, rhs: ngs.BaseVector | None) -> float:
-        """E at the current u."""
-        value = integrate(self.energy, self.u.space.mesh, order=self.order)
-        return value - (ngs.InnerProduct(rhs, self.u.vec) if rhs is not None else 0.0)
-
-    def solve(self, rhs: ngs.BaseVector | None = None) -> NewtonResult:
-        """Newton steps from the current u until converged; ``rhs`` holds the linear terms
-        (body force, alpha1/dt M u_prev), None for none. Raises RuntimeError if it does not
-        converge."""
-        a, vec = self.a, self.u.vec
-        residual, step, start = vec.CreateVector(), vec.CreateVector(), vec.CreateVector()
-        result = self.last = NewtonResult(0)
-        for iteration in range(self.max_iterations + 1):
-            # BDDC (u_solver = 'cg') factorizes inside the assembly: no threads for it
-            with parallel() if self.preconditioner is None else self.solves():
-                a.Assemble()
-                residual.data = a.mat * vec
-            scale = float(np.linalg.norm(residual.FV().NumPy()))
-            if rhs is not None:
-                residual.data -= rhs
-            relative = float(np.linalg.norm(residual.FV().NumPy()[self._free])) / scale if scale else 0.0
-            result.residuals.append(relative)
-            if relative <= self.rtol:
-                result.iterations = iteration
-                return result
-            if iteration == self.max_iterations:
-                break
-            with self.solves():
-                inverse = self._factorize()
-                step.data = inverse * residual
-            solver_iterations(inverse)  # raises if CG did not converge
-            decrement2 = max(ngs.InnerProduct(step, residual), 0.0)
-            # backtracking on the energy: a full step unless it raises E (Armijo, 1e-4); the
-            # slack lets through decreases below the round-off of E itself
-            start.data = vec
-            energy, s = self.total_energy(rhs), 1.0
-            slack = 1e-12 * abs(energy)
-            for _ in range(30):
-                vec.data = start - s * step
-                if self.total_energy(rhs) <= energy - 1e-4 * s * decrement2 + slack:
-                    break
-                s *= 0.5
-        raise RuntimeError(f"Newton did not converge in {self.max_iterations} steps (relative "
-                           f"residuals {', '.join(f'{d:.2e}' for d in result.residuals[-4:])})")
+    return EnergySplit(kind, model.lam, model.mu, model.n_components, model.bulk_dim)

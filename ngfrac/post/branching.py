@@ -21,7 +21,7 @@ import ngsolve as ngs
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from ..solve.nodal import LagrangeNodes
+from ..fem.nodal import LagrangeNodes
 from .crackset import NodeGraph
 
 __all__ = ["CrackTopology", "crack_topology", "crack_topology_of"]

@@ -34,7 +34,6 @@ if TYPE_CHECKING:
     import ngsolve as ngs
 
     from ..scene import Geometry, Scene
-    from ..solve.stepper import PhaseFieldStepper
 
 __all__ = ["CrackPath", "tip_and_direction", "ridge_path", "connected_part", "final_ridge",
            "crack_path_rows", "history_path", "fit_direction",
@@ -290,7 +289,7 @@ def mts_kink_angle(k1: float, k2: float) -> float:
     return math.degrees(2 * math.atan((k1 - math.sqrt(k1 * k1 + 8 * k2 * k2)) / (4 * k2)))
 
 
-def measure_kink(stepper: PhaseFieldStepper, rmin: float, rmax: float, n_radii: int = 25,
+def measure_kink(stepper: Any, rmin: float, rmax: float, n_radii: int = 25,
                  level: float = 0.5) -> tuple[float, CrackPath]:
     """The kink angle of a stepper's current crack from the ridge of z.
 
@@ -411,9 +410,9 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     """
     import ngsolve as ngs
 
-    from ..physics.elastic import make_model
+    from ..scene.build import elastic_model_of
 
-    model = make_model(scene)
+    model = elastic_model_of(scene)
     if model.n_components != 2:
         raise ValueError("sharp_crack_solution is for the plane models")
     if not all(load.is_dirichlet for load in scene.loads) or scene.phase_field.pressurized:
@@ -456,9 +455,7 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     behind = tip - r[:, None] * tangent
     jump = at(behind + gap * normal) - at(behind - gap * normal)
     jump_local = np.column_stack([jump @ tangent, jump @ normal])
-    lam, mu = scene.material.lame  # the 3D constants
-    nu = lam / (2 * (lam + mu))
-    kappa = 3 - 4 * nu if scene.model.kind == "plane_strain" else (3 - nu) / (1 + nu)
+    mu, kappa = model.mu, model.kolosov
     k1, k2 = stress_intensity_from_jump(r, jump_local, mu, kappa)
     # E' = 8 mu / (kappa + 1): E/(1 - nu^2) in plane strain, E in plane stress
     G = (k1 * k1 + k2 * k2) * (kappa + 1) / (8 * mu)

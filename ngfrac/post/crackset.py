@@ -29,9 +29,9 @@ import ngsolve as ngs
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from ..mesh.remesh import ElementGeometry, edge_numbers
+from ..fem.elements import ElementGeometry, edge_numbers
 from ..physics.cracks import distance_to_cracks
-from ..solve.nodal import LagrangeNodes
+from ..fem.nodal import LagrangeNodes
 
 __all__ = ["CrackSet", "JOINED", "NodeGraph", "find_crack"]
 
@@ -64,7 +64,7 @@ class NodeGraph:
     Parameters
     ----------
     mesh : ngsolve.Mesh
-    nodes : ngfrac.solve.nodal.LagrangeNodes
+    nodes : ngfrac.fem.nodal.LagrangeNodes
         The nodes of z on ``mesh`` (vertices, then edge midpoints).
     joined : {"element", "sub-simplices"}
         Which nodes are neighbours (:data:`JOINED`). The crack set (:func:`find_crack`) uses

@@ -6,14 +6,14 @@ from dataclasses import dataclass
 import numpy as np
 import ngsolve as ngs
 
-from ..mesh.remesh import ElementGeometry
-from ..physics.crack_models import AT2, CrackModel
-from ..solve.threads import integrate
+from ..fem.elements import ElementGeometry
+from ..physics.crack_models import CrackModel
+from ..fem.threads import integrate
 
 
 @dataclass(frozen=True)
 class Energies:
-    """Energies of a state (no body force, so E_total = E_el + E_surf)."""
+    """Energies of a state: elastic, surface, the crack length and the work of the loads."""
 
     E_el: float
     E_surf: float
@@ -30,20 +30,19 @@ class Energies:
 
 def energies(mesh: ngs.Mesh, z: ngs.GridFunction, energy_density: ngs.CoefficientFunction,
              gamma: ngs.CoefficientFunction, epsilon: float, residual_stiffness: float,
-             force_times_u: ngs.CoefficientFunction | None = None, order: int = 5,
-             crack_model: CrackModel | None = None,
-             surface: tuple[float, float] | None = None) -> Energies:
+             crack_model: CrackModel, force_times_u: ngs.CoefficientFunction | None = None,
+             order: int = 5, surface: tuple[float, float] | None = None) -> Energies:
     """Integrate the energies in one pass.
 
-    ``E_el = 1/2 int g(z) sigma:e`` with ``g = (1-z)^2 + eta``, ``E_surf = int gamma w``,
-    ``crack_length = int w`` (the Gamma-limit of the surface term; ``w`` the crack model's
-    surface density, AT2's ``1/2 (eps|grad z|^2 + z^2/eps)`` by default), and the work
+    ``E_el = 1/2 int g(z) W`` with the crack model's degradation g (``(1-z)^2 + eta`` for
+    AT2 and AT1), ``E_surf = int gamma w``, ``crack_length = int w`` (the Gamma-limit of the
+    surface term; ``w`` the crack model's surface density), and the work
     ``int f.u`` when a body force is given. ``surface``, when given, is (E_surf,
     crack_length) already computed (from the z-problem's matrices,
     :meth:`ngfrac.solve.z_problem.PhaseFieldProblem.surface_energy`), and only E_el and the
     work are integrated.
     """
-    model = crack_model or AT2()
+    model = crack_model
     elastic = 0.5 * model.degradation(z, residual_stiffness) * energy_density
     if surface is not None:
         parts = [elastic] if force_times_u is None else [elastic, force_times_u]

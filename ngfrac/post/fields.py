@@ -18,7 +18,7 @@ All of them are what the stepper itself uses, with the degradation g(z) = (1-z)^
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import ngsolve as ngs
@@ -27,9 +27,6 @@ from ..mesh.adapter import z_indicators
 from .diagnostics import element_diameters
 from ..physics.crack_models import CrackModel
 from ..physics.splits import EnergySplit, principal_strains_3d
-
-if TYPE_CHECKING:
-    from ..solve.stepper import PhaseFieldStepper
 
 __all__ = ["elastic_energy_density", "undegraded_density", "degraded_stress", "split_stresses",
            "stress_components", "von_mises", "principal_stresses", "projected",
@@ -41,7 +38,7 @@ def elastic_energy_density(model: Any, split: EnergySplit | None, crack_model: C
     """The integrand of E_el.
 
     ``1/2 g(z) sigma[u]:e[u]`` without a split, ``g(z) psi+ + psi-`` with one; ``g`` is the
-    crack model's degradation ``(1 - z)^2 + eta``.
+    crack model's degradation (residual stiffness included).
 
     Parameters
     ----------
@@ -54,7 +51,7 @@ def elastic_energy_density(model: Any, split: EnergySplit | None, crack_model: C
     if split is None:
         return 0.5 * crack_model.degradation(z, eta) * undegraded_density(model, split, crack_model,
                                                                             u, z, eta)
-    return split.elastic_density(u, z, eta)
+    return split.elastic_density(u, crack_model.degradation(z, eta))
 
 
 def undegraded_density(model: Any, split: EnergySplit | None, crack_model: CrackModel,
@@ -123,10 +120,7 @@ def stress_components(stress: Any, dim: int) -> Any:
 
 def _with_out_of_plane(stress: Any, model: Any) -> Any:
     """The 3x3 stress of a plane model: sigma_zz = nu (sxx + syy) in plane strain, 0 in plane stress."""
-    szz = 0.0
-    if model.name == "plane_strain":
-        nu = model.lam / (2 * (model.lam + model.mu))
-        szz = nu * (stress[0, 0] + stress[1, 1])
+    szz = model.out_of_plane_stress(stress)
     return ngs.CoefficientFunction((stress[0, 0], stress[0, 1], 0.0,
                                     stress[1, 0], stress[1, 1], 0.0,
                                     0.0, 0.0, szz), dims=(3, 3))
@@ -166,7 +160,7 @@ def piecewise_constant(mesh: ngs.Mesh, values: np.ndarray, name: str) -> ngs.Gri
     return gf
 
 
-def snapshot_fields(stepper: "PhaseFieldStepper") -> dict[str, Any]:
+def snapshot_fields(stepper: Any) -> dict[str, Any]:
     """The fields of one VTK snapshot of a stepper, by name (see the module docstring)."""
     mesh, u, z = stepper.mesh, stepper.u, stepper.z
     eta = stepper.scene.phase_field.residual_stiffness

@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 import ngsolve as ngs
 
-from ..solve.threads import integrate
+from ..fem.threads import integrate
 
 
 def crack_volume(u: ngs.GridFunction, z: ngs.GridFunction, order: int = 5) -> float:
@@ -57,7 +57,7 @@ def opening_profile(u: ngs.GridFunction, z: ngs.GridFunction, crack: Sequence[Se
         Each line runs from -half_width to +half_width across the crack (about 10 epsilon:
         z = exp(-10) there).
     contains : callable
-        ``contains(points) -> bools`` of the domain (:meth:`ngfrac.mesh.domains.Domain.contains`);
+        ``contains(points) -> bools`` of the domain (:meth:`ngfrac.geometry.domains.Domain.contains`);
         the part of a line outside it is left out.
     n_stations, n_across : int
         Lines, and sample points on each line (trapezoid rule).

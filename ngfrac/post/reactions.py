@@ -19,16 +19,15 @@ of that solve (assembled with the z it used, z^{k-1} inside a step).
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import ngsolve as ngs
 
-from ..solve.threads import integrate
+from ..fem.threads import integrate
 
 if TYPE_CHECKING:
     from ..scene import Load
-    from ..solve.u_problem import DisplacementProblem
 
 
 def indicator(fes: ngs.FESpace, boundary: str, component: int = 0) -> ngs.GridFunction:
@@ -64,7 +63,7 @@ def reaction(residual: ngs.BaseVector, fes: ngs.FESpace, boundary: str,
     return forces
 
 
-def reaction_forces(problem: "DisplacementProblem", loads: tuple["Load", ...],
+def reaction_forces(problem: Any, loads: tuple["Load", ...],
                     boundaries: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
     """The reaction force on each loaded boundary, one entry per component of u.
 
@@ -100,7 +99,7 @@ def boundary_mean(u: ngs.GridFunction, boundary: str) -> np.ndarray:
     return np.atleast_1d(np.asarray(integrate(u, mesh, vb=ngs.BND, definedon=region))) / length
 
 
-def reaction_columns(problem: "DisplacementProblem", loads: tuple["Load", ...]) -> dict[str, float]:
+def reaction_columns(problem: Any, loads: tuple["Load", ...]) -> dict[str, float]:
     """History columns: ``F<c>_<boundary>`` and ``u<c>_<boundary>`` for each Dirichlet boundary.
 
     ``c`` is x, y (plane models) or z (mode III, out of plane); ``u<c>`` is the boundary mean

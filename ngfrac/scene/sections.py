@@ -22,13 +22,14 @@ import numpy as np
 
 from .checks import check_times, crack_problems, nonfinite_value
 from ..physics.crack_models import CRACK_MODELS
+from ..physics.elastic import ELASTIC_MODELS
 from .expressions import Expression, ExpressionError
 from .units import SCENE_UNITS, unit_system
 
 if TYPE_CHECKING:
-    from ..mesh.domains import Domain
+    from ..geometry.domains import Domain
 
-MODELS = ("mode3", "plane_strain", "plane_stress", "elasticity_3d")
+MODELS = tuple(ELASTIC_MODELS)
 """Model names a scene may choose (``model.kind``)."""
 
 MODELS_3D = ("elasticity_3d",)
@@ -421,7 +422,7 @@ class Geometry(_Section):
     front (z = z0 + depth). ``occ``: ``[[geometry.shapes]]`` (:class:`Shape`) or a CAD
     ``file`` (STEP, BREP, IGES; times ``scale``), boundaries named by ``[[geometry.boundaries]]``
     (:class:`BoundarySelector`) and the file; the rest is ``default_boundary``
-    (:mod:`ngfrac.mesh.cad`). ``split_points`` split boundary edges (2D) before they are named.
+    (:mod:`ngfrac.geometry.cad`). ``split_points`` split boundary edges (2D) before they are named.
     """
 
     SECTION: ClassVar[str] = "geometry"
@@ -530,13 +531,15 @@ class Geometry(_Section):
         return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
 
     def domain(self) -> "Domain":
-        """The domain this section describes (:func:`ngfrac.mesh.domains.domain_of`): its
+        """The domain this section describes: its
         boundary and containment tests, measure and sample points live there. An occ domain
         is built once per section (OCC work) and kept."""
-        from ..mesh.domains import domain_of, occ_domain_of
+        from ..geometry.domains import Box, Rectangle
 
-        if self.kind != "occ":
-            return domain_of(self)
+        if self.kind == "box":
+            return Box(self.width, self.height, self.depth, tuple(self.origin))
+        if self.kind == "rectangle":
+            return Rectangle(self.width, self.height, tuple(self.origin))
         built = self.__dict__.get("_domain")
         if built is None:
             built = occ_domain_of(self)
@@ -554,7 +557,7 @@ class Geometry(_Section):
     @classmethod
     def of_domain(cls, domain: "Domain", mesh_size: float = 0.0) -> "Geometry":
         """An occ geometry section for a domain built in code (an
-        :class:`~ngfrac.mesh.cad.OccDomain` of any netgen.occ shape), for a :class:`Scene`.
+        :class:`~ngfrac.geometry.cad.OccDomain` of any netgen.occ shape), for a :class:`Scene`.
 
         Its ``file`` is :attr:`IN_CODE`: such a scene cannot be written to and read from TOML,
         and ``dataclasses.replace``, copies and pickles of this section lose the domain
@@ -749,7 +752,7 @@ class Discretization(_Section):
     (an active-set method); ``"auto"`` (the default) is the crack model's choice:
     ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the
     default) runs factorizations and solves outside NGSolve's TaskManager so that a run is
-    bitwise reproducible with any thread count (:mod:`ngfrac.solve.threads`); ``true``
+    bitwise reproducible with any thread count (:mod:`ngfrac.fem.threads`); ``true``
     threads them too. ``concurrent_substeps = true`` runs the u- and the z-sub-step of a step
     at the same time, each on one core with one NGSolve thread (with ``coupling = "paper"``
     they are independent: z uses the previous u); bitwise the same results as one thread,
@@ -1260,3 +1263,42 @@ def _convert(value: Any, hint: Any, key: str) -> Any:
                              "(3D: [[x, y, z], ...])")
         return tuple(tuple(_convert(c, float, key) for c in v) for v in value)
     raise TypeError(f"no conversion for {hint}")  # a programming error, not user input
+
+
+def occ_domain_of(geometry: "Geometry") -> "Domain":
+    """The :class:`~ngfrac.geometry.cad.OccDomain` of a ``geometry.kind = "occ"`` section: its
+    shapes or file, with the boundaries named by its selectors.
+
+    Raises
+    ------
+    SceneError
+        A selector matches nothing, two names claim one part, the file is missing or cannot
+        be read, or the shapes (the file) leave no face or solid or several separate pieces.
+    """
+    from ..geometry.cad import (BoundaryConflict, EmptyShape, UnreadableFile, connected_pieces,
+                      name_boundaries, read_shape, shape_from_specs, split_edges)
+
+    try:
+        shape = (read_shape(geometry.file, geometry.scale) if geometry.file
+                 else shape_from_specs(geometry.shapes))
+    except (FileNotFoundError, UnreadableFile) as err:
+        raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None
+    except EmptyShape as err:
+        prefix = f"geometry.file = {geometry.file!r}: " if geometry.file else "geometry."
+        raise SceneError(f"{prefix}{err}") from None
+    except Exception as err:  # OCC raises plain Exceptions for bad shapes or files
+        what = f"file = {geometry.file!r}" if geometry.file else "shapes"
+        text = " ".join(str(err).split())  # one line: OCC's messages span several
+        raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
+    pieces = connected_pieces(shape)
+    if pieces > 1:  # each piece would need its own supports: a singular u-problem otherwise
+        source = f"geometry.file = {geometry.file!r} holds" if geometry.file else "geometry.shapes make"
+        raise SceneError(f"{source} {pieces} separate pieces (a cut through the domain, or a "
+                         "shape that touches no other); ngfrac meshes one connected part: "
+                         "join or remove the pieces")
+    try:
+        if geometry.split_points:
+            shape = split_edges(shape, geometry.split_points)
+        return name_boundaries(shape, geometry.boundaries, geometry.default_boundary)
+    except BoundaryConflict as err:
+        raise SceneError(str(err)) from None

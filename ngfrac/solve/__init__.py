@@ -1,2 +1,2 @@
 """Solving in time: the stepper of the paper's semi-implicit scheme, its u- and z-sub-problems,
-time-step control, linear solvers, Lagrange-node values and thread control."""
+time-step control, and the seam between one process and many."""

@@ -6,10 +6,10 @@ from typing import Any
 
 import ngsolve as ngs
 
-from ..parallel.communicator import SERIAL
+from .communicator import SERIAL
 
 from .profiling import PhaseTimer
-from .threads import ThreadPolicy
+from ..fem.threads import ThreadPolicy
 
 
 @dataclass(frozen=True, eq=False)

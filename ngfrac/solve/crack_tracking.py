@@ -6,7 +6,7 @@ import numpy as np
 from ..physics.crack_models import CrackModel
 from ..post.crackset import CrackSet, NodeGraph, find_crack
 from ..post.diagnostics import element_diameters
-from .spaces import MeshFields
+from ..mesh.fields import MeshFields
 
 
 class CrackTracker:

@@ -16,7 +16,7 @@ This module solves the sub-step's quadratic problem
 exactly, by the primal-dual active set method (Hintermueller, Ito, Kunisch 2003: a
 semismooth Newton method, finite termination when A is an M-matrix). The unknowns are the
 node values of z (the constraint acts on single unknowns there): ``A = T^T A_h T`` with
-T of :meth:`ngfrac.solve.nodal.LagrangeNodes.coefficient_matrix`. Each iteration solves the
+T of :meth:`ngfrac.fem.nodal.LagrangeNodes.coefficient_matrix`. Each iteration solves the
 system on the inactive nodes only, with SciPy's SuperLU (single-threaded: bitwise the same
 with any thread count). For AT1 the inactive set is the band and the process zone, a small
 part of the mesh.
@@ -32,7 +32,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 if TYPE_CHECKING:
-    from .nodal import LagrangeNodes
+    from ..fem.nodal import LagrangeNodes
 
 LOG = logging.getLogger(__name__)
 
@@ -74,7 +74,7 @@ class NodalObstacle:
 
     Parameters
     ----------
-    nodes : ngfrac.solve.nodal.LagrangeNodes
+    nodes : ngfrac.fem.nodal.LagrangeNodes
         The nodes of the z-space.
     """
 

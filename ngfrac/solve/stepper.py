@@ -25,23 +25,24 @@ import numpy as np
 import ngsolve as ngs
 
 from ..mesh.adapter import Adaptation
-from ..mesh.domains import Domain, domain_of
-from ..parallel.communicator import SERIAL, Communicator, ParallelError
-from ..physics.crack_models import crack_model
+from ..geometry.domains import Domain, domain_of
+from .communicator import SERIAL, Communicator, ParallelError
+from ..physics.crack_models import CrackModel
 from ..physics.cracks import distance_to_cracks, initial_tip
-from ..physics.elastic import make_model
+from ..physics.elastic import ElasticModel
 from ..post.crackset import CrackSet
 from ..post.diagnostics import energies
 from ..post.pressurized import crack_volume
 from ..post.reactions import reaction_columns
 from ..scene import Scene
+from ..scene.build import crack_model_of, elastic_model_of
 from .crack_tracking import CrackTracker
 from .context import StepContext
 from .profiling import PhaseTimer
 from .records import StepRecord
-from .spaces import MeshFields
+from ..mesh.fields import MeshFields
 from .state import STATE_FIELDS, StepperState, copy_of
-from .threads import ThreadPolicy
+from ..fem.threads import ThreadPolicy
 from .time_control import StepSizeControl
 from .u_problem import DisplacementProblem, SolverError
 from .z_problem import PhaseFieldProblem
@@ -65,6 +66,12 @@ class PhaseFieldStepper:
         (:class:`~ngfrac.parallel.MPICommunicator`; the mesh is made on rank 0 and
         distributed, so no ``mesh`` can be given, and a ``state`` must be on the distributed
         mesh: :func:`ngfrac.parallel.checkpoints.resume_distributed`).
+    elastic_model : ElasticModel, optional
+        A model of the elastic energy (:class:`ngfrac.physics.elastic.ElasticModel`) instead of
+        the scene's ``model.kind``; the loads are still the scene's.
+    crack_model : CrackModel, optional
+        A crack model (:class:`ngfrac.physics.crack_models.CrackModel`) instead of the scene's
+        ``phase_field.model``.
 
     Examples
     --------
@@ -74,7 +81,9 @@ class PhaseFieldStepper:
     """
 
     def __init__(self, scene: Scene, mesh: ngs.Mesh | None = None,
-                 state: StepperState | None = None, comm: Communicator | None = None) -> None:
+                 state: StepperState | None = None, comm: Communicator | None = None, *,
+                 elastic_model: ElasticModel | None = None,
+                 crack_model: CrackModel | None = None) -> None:
         self._scene = scene
         self.comm: Communicator = SERIAL if comm is None else comm
         """The processes of the run (:mod:`ngfrac.parallel`)."""
@@ -84,8 +93,9 @@ class PhaseFieldStepper:
             raise ParallelError("an MPI run makes its mesh on rank 0 from the scene or a "
                                 "checkpoint; a given mesh or serial state is not supported: "
                                 "use ngfrac.parallel.checkpoints.resume_distributed")
-        self.model = make_model(scene)
-        self.crack_model = crack_model(scene.phase_field.model)
+        self.model = elastic_model_of(scene) if elastic_model is None else elastic_model
+        """The elastic model (:mod:`ngfrac.physics.elastic`)."""
+        self.crack_model = crack_model_of(scene) if crack_model is None else crack_model
         """The phase-field functional (:mod:`ngfrac.physics.crack_models`)."""
         self.k = 0
         self.ticks = 0
@@ -98,8 +108,9 @@ class PhaseFieldStepper:
                                    PhaseTimer(), self.comm)
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
         self.domain: Domain = domain_of(scene.geometry)
-        """The domain (:mod:`ngfrac.mesh.domains`)."""
-        self.adapter = self.comm.mesh_adapter(scene) if scene.adaptivity.enabled else None
+        """The domain (:mod:`ngfrac.geometry.domains`)."""
+        self.adapter = (self.comm.mesh_adapter(scene, self.crack_model)
+                        if scene.adaptivity.enabled else None)
         polylines = [crack.points for crack in scene.cracks]
         self.tracker = CrackTracker(
             polylines, initial_tip(polylines[0], self.domain.on_boundary) if polylines else None,
@@ -139,7 +150,7 @@ class PhaseFieldStepper:
     def _rebuild(self, mesh: ngs.Mesh) -> MeshFields:
         """New (zero) fields on ``mesh`` and the two sub-problems on them."""
         sc = self.scene
-        self.fields = MeshFields.on(mesh, sc, self.model)
+        self.fields = MeshFields.on(mesh, sc, self.model, self.crack_model)
         self.u_problem = DisplacementProblem(self.fields, sc, self.model, self.crack_model,
                                              self.context)
         f = self.fields
@@ -392,9 +403,9 @@ class PhaseFieldStepper:
         pf, body_force = self.scene.phase_field, self.u_problem.body_force
         with self.timer.phase("diagnostics: energies, tip"):
             e = energies(f.mesh, f.z, self.u_problem.elastic_density(), self.gamma,
-                         pf.epsilon, pf.residual_stiffness,
+                         pf.epsilon, pf.residual_stiffness, self.crack_model,
                          None if body_force is None else body_force * f.u,
-                         order=f.integration_order, crack_model=self.crack_model,
+                         order=f.integration_order,
                          surface=self.z_problem.surface_energy())
             crack = self.crack()  # cached when the mesh-change check has found it
         extra_work = self.u_problem.surface_work()

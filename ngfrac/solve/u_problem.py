@@ -18,12 +18,14 @@ import ngsolve as ngs
 
 from ..physics.crack_models import CrackModel
 from ..physics.elastic import traction_of
-from ..physics.splits import NewtonResult, NewtonSolver, make_split, tangent_integrators
+from ..fem.newton import NewtonResult, NewtonSolver
+from ..physics.splits import make_split, tangent_integrators
 from ..scene import Scene
-from .linear import UOperator, register_preconditioner
+from ..fem.linear import UOperator, register_preconditioner
 from .context import StepContext
-from .spaces import MeshFields, dx_of_order
-from .threads import integrate
+from ..fem.quadrature import dx_of_order
+from ..mesh.fields import MeshFields
+from ..fem.threads import integrate
 
 
 class SolverError(RuntimeError):
@@ -39,7 +41,7 @@ class DisplacementProblem:
         u is solved for in place; z and u_prev are read.
     scene : Scene
     model : ElasticModel
-        The elastic model (:func:`ngfrac.physics.elastic.make_model`).
+        The elastic model (:func:`ngfrac.scene.build.elastic_model_of`).
     crack_model : CrackModel
         Its degradation g(z) multiplies the stress.
     context : StepContext
@@ -59,7 +61,7 @@ class DisplacementProblem:
         u, v = fes.TnT()
         stiffness = self.degradation * model.stress_strain(u, v)
         if self.split is not None:  # nonlinear: a_u is the tangent at the current u
-            stiffness = self.split.tangent(fields.u, u, v, fields.z, self.eta)
+            stiffness = self.split.tangent(fields.u, u, v, self.degradation)
         if pf.alpha1 > 0:
             stiffness = stiffness + pf.alpha1 * inv_dt * u * v
         self.a_u = ngs.BilinearForm(fes, symmetric=True)
@@ -194,7 +196,7 @@ class DisplacementProblem:
         """Newton for the split problem; alpha1 > 0 adds the energy of the alpha1 term (its
         linear part is the solve's right-hand side)."""
         f = self.fields
-        energy = self.split.elastic_density(f.u, f.z, self.eta)
+        energy = self.split.elastic_density(f.u, self.degradation)
         if alpha1 > 0:
             energy = energy + 0.5 * alpha1 * self.context.inv_dt * ngs.InnerProduct(f.u, f.u)
         return NewtonSolver(self.a_u, f.u, energy, f.integration_order, f.fes_u.FreeDofs(),
@@ -228,7 +230,7 @@ class DisplacementProblem:
         f = self.fields
         if self.split is None:
             return self.model.energy_density(f.u)
-        return 2 * self.split.elastic_density(f.u, f.z, self.eta) / self.degradation
+        return 2 * self.split.elastic_density(f.u, self.degradation) / self.degradation
 
 
 class DirichletValues:

@@ -3,8 +3,9 @@
     alpha2 (zt - z_old)/dt = eps div(gamma grad zt) - gamma zt/eps + W (1 - zt)   (AT2)
     z = min(1, max(zt, z_old))        at the Lagrange nodes of z
 
-The crack model supplies the surface terms (:mod:`ngfrac.physics.crack_models`; AT1 adds a
-constant source). The matrix is K + (alpha2/dt) M + D(W): K and M change only with the
+The crack model supplies the surface terms and the drive (:mod:`ngfrac.physics.crack_models`;
+AT1 adds a constant source; a model with another degradation g gives the drive
+``-1/2 g'(zt) W`` linearized at z_old, :meth:`~ngfrac.physics.crack_models.CrackModel.drive_factors`). The matrix is K + (alpha2/dt) M + D(W): K and M change only with the
 mesh and are assembled once per mesh, only the drive part D is assembled per step
 (docs/benchmarks.md has the saving). The right-hand side needs no assembly of its own:
 int (alpha2/dt z_old + W) w = (alpha2/dt) M z_old + D 1, with 1 the coefficients of the
@@ -25,7 +26,7 @@ from ..physics.crack_models import CrackModel
 from ..scene import Scene
 from .context import StepContext
 from .obstacle import NodalObstacle
-from .spaces import MeshFields
+from ..mesh.fields import MeshFields
 from .u_problem import SolverError
 
 CG_MAXITER = 2000
@@ -64,8 +65,13 @@ class PhaseFieldProblem:
         self.z_trial = ngs.GridFunction(fields.fes_z, "z_trial")
         zt, w = fields.fes_z.TnT()
         dx, eps = fields.dx, pf.epsilon
+        factors = crack_model.drive_factors(fields.z)  # z holds z_old during a step
+        implicit, explicit = (drive, drive) if factors is None else (factors[0] * drive,
+                                                                     factors[1] * drive)
         self.a_z = ngs.BilinearForm(fields.fes_z, symmetric=True)
-        self.a_z += drive * zt * w * dx
+        self.a_z += implicit * zt * w * dx
+        self._drive_rhs = None if factors is None else ngs.LinearForm(explicit * w * dx)
+        """int explicit W w, when the drive's two parts differ (else D 1 from the matrix)."""
         self._k = ngs.BilinearForm(fields.fes_z, symmetric=True)
         self._k += crack_model.stiffness(zt, w, gamma, eps) * dx
         self._m = ngs.BilinearForm(fields.fes_z, symmetric=True)
@@ -91,16 +97,16 @@ class PhaseFieldProblem:
         self._ones = None if context.comm.distributed else _constant_one(fields.fes_z, fields.z.vec)
         self._inverse: Any = None
         self._obstacle = NodalObstacle(fields.nodes) if update == "obstacle" else None
-        self._distributed: DistributedSystem | None = None
+        self._distributed: Any = None
+        """The communicator's z-system of a distributed mesh (:meth:`Communicator.z_system`)."""
         if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
-            rhs = (pf.alpha2 * inv_dt * fields.z + drive) * w
+            rhs = (pf.alpha2 * inv_dt * fields.z + explicit) * w
             for part in (source, pressure):
                 rhs = rhs if part is None else rhs + part
             self._distributed_rhs = ngs.LinearForm(rhs * dx)
-            self._distributed = DistributedSystem(
+            self._distributed = context.comm.z_system(
                 fields.fes_z, (crack_model.stiffness(zt, w, gamma, eps)
-                               + pf.alpha2 * inv_dt * zt * w + drive * zt * w) * dx,
-                context.comm.z_preconditioner)
+                               + pf.alpha2 * inv_dt * zt * w + implicit * zt * w) * dx)
         self.shortened = 0
         """Projections the descent shortened (``discretization.z_update = "descent"``)."""
 
@@ -146,7 +152,11 @@ class PhaseFieldProblem:
         self.a_z.Assemble()
         mass_factor = self.alpha2 * self.context.inv_dt.Get()
         rhs, mass = self.rhs, self._m.mat
-        rhs.data = self.a_z.mat * self._ones  # int W w, before K and M join the matrix
+        if self._drive_rhs is None:
+            rhs.data = self.a_z.mat * self._ones  # int W w, before K and M join the matrix
+        else:
+            self._drive_rhs.Assemble()
+            rhs.data = self._drive_rhs.vec
         rhs.data += mass_factor * (mass * self.fields.z.vec)
         if self._source is not None:
             rhs.data += self._source.vec
@@ -268,40 +278,3 @@ def _surface_value(stiffness: Any, source: ngs.LinearForm | None, z: ngs.BaseVec
     if source is not None:
         terms = terms - source.vec.FV().NumPy() * values
     return math.fsum(terms)
-
-
-class DistributedSystem:
-    """The z-system of a distributed mesh: K + (alpha2/dt) M + D(W) as one form, assembled
-    every step with its parallel preconditioner registered, solved by CG from z_old.
-
-    Distributed matrices have no ``AsVector`` (the serial path adds K and M to D's values),
-    no ``CreateSmoother`` and no direct solve in the pip wheel.
-
-    Parameters
-    ----------
-    fes : ngsolve.FESpace
-        The space of z.
-    integrand : ngsolve.comp.SumOfIntegrals
-        The whole bilinear form.
-    preconditioner : str
-        ``"local"`` (Jacobi) or ``"bddc"``.
-    """
-
-    def __init__(self, fes: ngs.FESpace, integrand: Any, preconditioner: str) -> None:
-        self.form = ngs.BilinearForm(fes, symmetric=True)
-        self.form += integrand
-        self.kind = preconditioner
-        self.preconditioner = ngs.Preconditioner(self.form, preconditioner)
-
-    def solve(self, rhs: ngs.BaseVector, z_old: ngs.BaseVector, out: ngs.BaseVector,
-              step: int | str) -> int:
-        """Assemble, then CG (relative tolerance 1e-10) from z_old into ``out``; returns the
-        iterations."""
-        self.form.Assemble()
-        out.data = z_old
-        cg = CGSolver(self.form.mat, self.preconditioner.mat, tol=1e-10, maxiter=CG_MAXITER)
-        cg.Solve(rhs=rhs, sol=out, initialize=False)
-        if cg.iterations >= CG_MAXITER:
-            raise SolverError(f"the z-solve (CG, preconditioner {self.kind!r}) did "
-                              f"not converge at step {step}; run serially")
-        return int(cg.iterations)

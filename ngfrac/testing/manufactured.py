@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
-from ..mesh.domains import build_mesh
+from ..geometry.domains import build_mesh
 from ..scene import Scene
 from ..solve.stepper import PhaseFieldStepper
 from .scenes import demo_data, scene_from

@@ -6,10 +6,11 @@ from typing import Sequence
 import numpy as np
 import ngsolve as ngs
 
-from ..mesh.remesh import ElementGeometry, adapt_mesh, edge_numbers
+from ..fem.elements import ElementGeometry, edge_numbers
+from ..mesh.remesh import adapt_mesh
 from ..physics.cracks import distance_to_polylines, optimal_profile
 from ..scene import Geometry
-from ..solve.nodal import LagrangeNodes
+from ..fem.nodal import LagrangeNodes
 
 __all__ = ["UNIT_SQUARE", "HALF_SLIT", "crack_mesh", "element_maximum", "profile_field"]
 

@@ -17,7 +17,7 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.scene.expressions import Expression
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.geometry.domains import build_mesh
 from ngfrac.scene import Material, Scene
 from ngfrac.solve.stepper import PhaseFieldStepper
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from ngfrac import cli
-from ngfrac.mesh.domains import Rectangle
+from ngfrac.geometry.domains import Rectangle
 
 from ngfrac.testing.bad_inputs import ALL_CASES, bad_scene_file
 

@@ -8,7 +8,7 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.mesh.domains import build_mesh, netgen_geometry
+from ngfrac.geometry.domains import build_mesh, netgen_geometry
 from ngfrac.mesh.remesh import remesh
 from ngfrac.io.hdf5 import MeshArrays, ResultsError, StoredField
 from ngfrac.io.results import FORMAT_VERSION, ResultsWriter, open_results

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from ngfrac.physics.cracks import distance_to_polygons
-from ngfrac.mesh.domains import build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh
+from ngfrac.geometry.domains import build_mesh, netgen_geometry
+from ngfrac.fem.elements import ElementGeometry
+from ngfrac.mesh.remesh import adapt_mesh
 from ngfrac.scene import Scene
 from ngfrac.solve.stepper import PhaseFieldStepper
 

@@ -7,9 +7,9 @@ import pytest
 
 from ngfrac.mesh.adapter import MeshAdapter
 from ngfrac.physics.cracks import crack_direction, distance_to_polylines, optimal_profile
-from ngfrac.mesh.domains import build_mesh
-from ngfrac.mesh.remesh import ElementGeometry
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.geometry.domains import build_mesh
+from ngfrac.fem.elements import ElementGeometry
+from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.solve.stepper import PhaseFieldStepper
 
 from ngfrac.testing.scenes import quick_slit

@@ -5,7 +5,7 @@ import pytest
 
 from ngfrac.mesh.adapter import AdaptivitySizes
 from ngfrac.solve.stepper import PhaseFieldStepper
-from ngfrac.solve.threads import serial
+from ngfrac.fem.threads import single_thread
 from ngfrac.mesh.transfer import evaluate, locate
 
 from ngfrac.testing.scenes import demo_data, scene_from
@@ -48,7 +48,7 @@ def adaptive_run():
     had cut the plate; since then four two-thread runs had 11-13 changes and at most 0.20 %
     (issue #3's note has the command).
     """
-    with serial():
+    with single_thread():
         return _adaptive_run()
 
 
@@ -138,7 +138,7 @@ def test_mesh_follows_the_tip(adaptive_run):
     grown = [a for a in stepper.adaptations if a.crack_length_before > records[0].crack_length + 0.2]
     assert grown, "no adaptation after the crack grew"
     # after the crack crossed, the fine elements lie along y = 0.5 all the way to the right
-    from ngfrac.mesh.remesh import ElementGeometry
+    from ngfrac.fem.elements import ElementGeometry
     geom = ElementGeometry.of(stepper.mesh)
     near_right_end = (geom.centroids[:, 0] > 0.9) & (np.abs(geom.centroids[:, 1] - 0.5) < 0.02)
     assert geom.diameters[near_right_end].min() < 2 * sizes.h_band

@@ -9,7 +9,7 @@ import pytest
 
 from ngfrac.mesh import remesh as meshing
 from ngfrac.physics.cracks import distance_to_polylines
-from ngfrac.mesh.domains import build_mesh, netgen_geometry
+from ngfrac.geometry.domains import build_mesh, netgen_geometry
 from ngfrac.mesh.remesh import (
     ElementGeometry,
     SizeFloor,

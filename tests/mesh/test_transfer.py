@@ -9,9 +9,10 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.physics.cracks import distance_to_polylines
-from ngfrac.mesh.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
-from ngfrac.mesh.remesh import ElementGeometry, adapt_mesh
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.geometry.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
+from ngfrac.fem.elements import ElementGeometry
+from ngfrac.mesh.remesh import adapt_mesh
+from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 from ngfrac.mesh.transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
 from ngfrac.testing import meshes

@@ -5,8 +5,9 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.mesh.domains import build_mesh
-from ngfrac.physics.elastic import AntiPlane, PlaneStrain, PlaneStress, make_model
+from ngfrac.geometry.domains import build_mesh
+from ngfrac.physics.elastic import AntiPlane, PlaneStrain, PlaneStress
+from ngfrac.scene.build import elastic_model_of
 from ngfrac.io.output import to_toml
 from ngfrac.scene import Material, Scene, SceneError, load_scene
 
@@ -27,7 +28,7 @@ def plane_data(kind="plane_strain"):
 def build(data):
     """Validate a scene and its model (which checks what spans sections)."""
     scene = Scene.from_dict(data)
-    return scene, make_model(scene)
+    return scene, elastic_model_of(scene)
 
 
 def bad(data, match):

@@ -43,7 +43,7 @@ def test_oblique_polyline_crack():
 
 def test_alignment_matters():
     """The kink of exp(-d/eps) on the crack is resolved only by a crack-aligned mesh."""
-    from ngfrac.mesh.domains import build_mesh
+    from ngfrac.geometry.domains import build_mesh
 
     scene = scene_from(demo_data(), f"phase_field.epsilon={EPS}", f"geometry.mesh_size={EPS / 2}")
     exact = 0.3 + math.pi * EPS / 4

@@ -9,7 +9,7 @@ from netgen.geom2d import unit_square
 from ngfrac.post.branching import crack_topology, crack_topology_of
 from ngfrac.post.crackset import NodeGraph
 from ngfrac.physics.cracks import distance_to_polylines, optimal_profile
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.fem.nodal import LagrangeNodes
 
 EPS = 0.02
 CRACKS = {

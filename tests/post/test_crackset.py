@@ -9,7 +9,7 @@ from netgen.occ import Box, OCCGeometry, Pnt
 
 from ngfrac.physics.cracks import distance_to_polygons, distance_to_polylines, optimal_profile
 from ngfrac.post.crackset import NodeGraph, find_crack
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.fem.nodal import LagrangeNodes
 
 EPS = 0.02
 H = 0.01

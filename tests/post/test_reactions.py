@@ -12,7 +12,7 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.geometry.domains import build_mesh
 from ngfrac.post.reactions import reaction_columns, reaction_forces
 from ngfrac.solve.stepper import PhaseFieldStepper
 

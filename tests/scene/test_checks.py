@@ -5,8 +5,8 @@ import warnings
 import pytest
 
 from ngfrac import MeshingError, ResolutionWarning, resolution_warnings, run_scene
-from ngfrac.scene.checks import estimated_vertices
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.mesh.resolution import estimated_vertices
+from ngfrac.geometry.domains import build_mesh
 from ngfrac.scene import Geometry, SceneError
 
 from ngfrac.testing.bad_inputs import BAD_2D, BAD_3D, BAD_EXPRESSIONS, BOX_CRACK, SLIT

@@ -8,7 +8,7 @@ import pytest
 from ngfrac import PhaseFieldStepper
 from ngfrac.scene.expressions import Expression
 from ngfrac.io.output import to_toml
-from ngfrac.solve.threads import serial
+from ngfrac.fem.threads import single_thread
 from ngfrac.scene import (Components, Crack, Discretization, Geometry, Load, Material, Model, Output,
                           PhaseField, Scene, SceneError, TimeSettings, apply_overrides, load_scene)
 
@@ -272,7 +272,7 @@ def test_scene_built_in_code_runs_like_the_same_scene_from_toml(tmp_path):
     path.write_text(CODE_TOML)
     from_toml, in_code = load_scene(path), code_scene()
     assert in_code == from_toml
-    with serial():  # one thread, then the configured count again
+    with single_thread():  # one thread, then the configured count again
         histories = [list(PhaseFieldStepper(scene).run()) for scene in (in_code, from_toml)]
     a, b = histories
     assert len(a) == len(b) == 3

@@ -7,9 +7,10 @@ import ngsolve as ngs
 import pytest
 
 from ngfrac.physics.cracks import distance_to_polygons, initial_tip
-from ngfrac.mesh.domains import build_mesh
-from ngfrac.physics.elastic import Elasticity3D, make_model
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.geometry.domains import build_mesh
+from ngfrac.physics.elastic import Elasticity3D
+from ngfrac.scene.build import elastic_model_of
+from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.post.reactions import reaction_forces
 from ngfrac.scene import Scene, SceneError
 from ngfrac.solve.stepper import PhaseFieldStepper, StepRecord
@@ -204,7 +205,7 @@ def test_elasticity_3d_model_and_uniaxial_reaction():
                      {"boundary": "left", "value": ["0", "free", "free"]},
                      {"boundary": "back", "value": ["free", "free", "0"]}]
     scene = Scene.from_dict(data)
-    model = make_model(scene)
+    model = elastic_model_of(scene)
     assert isinstance(model, Elasticity3D) and model.component_names == ("x", "y", "z")
     stepper = PhaseFieldStepper(scene)
     stepper.step()

@@ -7,7 +7,7 @@ import pytest
 import scipy.sparse as sp
 from netgen.geom2d import unit_square
 
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.solve.obstacle import VALUE_TOLERANCE, node_system, solve_lower_obstacle
 
 

@@ -1,6 +1,6 @@
 """The same scene gives the same bits: an adaptive run, twice with two NGSolve threads, once
 with one and once with its two sub-steps run concurrently, writes identical histories (timing
-columns aside; ngfrac.solve.threads says why)."""
+columns aside; ngfrac.fem.threads says why)."""
 from __future__ import annotations
 
 import csv

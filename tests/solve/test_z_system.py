@@ -11,7 +11,7 @@ import pytest
 
 from ngfrac import PhaseFieldStepper, Scene
 from ngfrac.post.diagnostics import energies
-from ngfrac.solve.threads import integrate
+from ngfrac.fem.threads import integrate
 
 ROUND_OFF = 1e-13
 

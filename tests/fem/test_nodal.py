@@ -1,12 +1,12 @@
-"""Node values of P1/P2 fields (ngfrac.solve.nodal): exact bounds after the round trip."""
+"""Node values of P1/P2 fields (ngfrac.fem.nodal): exact bounds after the round trip."""
 from __future__ import annotations
 
 import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.mesh.domains import build_mesh
-from ngfrac.solve.nodal import LagrangeNodes
+from ngfrac.geometry.domains import build_mesh
+from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.scene import Geometry
 
 

@@ -7,8 +7,10 @@ from typing import Any
 import numpy as np
 import ngsolve as ngs
 
+from ..fem.nodal import LagrangeNodes
+from ..fem.quadrature import dx_of_order, quadrature_order
+from ..physics.crack_models import CrackModel
 from ..scene import Scene
-from .nodal import LagrangeNodes
 
 
 @dataclass(eq=False)
@@ -32,22 +34,24 @@ class MeshFields:
     """``dx`` with the quadrature of :attr:`integration_order` on every element."""
 
     @classmethod
-    def on(cls, mesh: ngs.Mesh, scene: Scene, model: Any) -> "MeshFields":
-        """Spaces and zero fields on ``mesh`` for ``scene`` and its elastic ``model``.
+    def on(cls, mesh: ngs.Mesh, scene: Scene, model: Any, crack_model: CrackModel) -> "MeshFields":
+        """Spaces and zero fields on ``mesh`` for ``scene``, its elastic ``model`` and its
+        ``crack_model`` (a degradation other than (1 - z)^2 makes the integrands other polynomials).
 
         On an occ domain with a curved boundary and order >= 2 the mesh is curved
-        (:meth:`ngfrac.mesh.cad.OccDomain.curve`, also a mesh read from a checkpoint) first.
+        (:meth:`ngfrac.geometry.cad.OccDomain.curve`, also a mesh read from a checkpoint) first.
 
         One quadrature in every form and energy (:func:`quadrature_order`): the u-step then
         minimizes exactly the energy that the diagnostics report.
         """
         disc = scene.discretization
         curved = disc.order >= 2 and scene.geometry.kind == "occ" and scene.geometry.domain().curved
-        if curved:  # curved boundaries (ngfrac.mesh.cad): isoparametric u
+        if curved:  # curved boundaries (ngfrac.geometry.cad): isoparametric u
             scene.geometry.domain().curve(mesh, disc.order, [c.points for c in scene.cracks])
         fes_u = model.space(mesh, disc.order, scene.loads)
         fes_z = ngs.H1(mesh, order=disc.z_order)
-        exact = scene.material.gamma.is_constant and scene.material.split == "none" and not curved
+        exact = (scene.material.gamma.is_constant and scene.material.split == "none"
+                 and not curved and crack_model.quadratic_degradation)
         order = quadrature_order(disc.order, disc.z_order, exact=exact)
         return cls(mesh, fes_u, fes_z, ngs.GridFunction(fes_u, "u"),
                    ngs.GridFunction(fes_u, "u_prev"), ngs.GridFunction(fes_z, "z"),
@@ -61,22 +65,3 @@ class MeshFields:
     def z_values(self) -> np.ndarray:
         """z at the Lagrange nodes."""
         return self.nodes.values(self.z)
-
-
-def dx_of_order(mesh: ngs.Mesh, order: int) -> Any:
-    """``dx`` with NGSolve's integration rule of ``order`` on every element of ``mesh``."""
-    element = ngs.TET if mesh.dim == 3 else ngs.TRIG
-    return ngs.dx(intrules={element: ngs.IntegrationRule(element, order)})
-
-
-def quadrature_order(order_u: int, order_z: int, exact: bool = True) -> int:
-    """The degree of the highest polynomial integrand of the forms and energies.
-
-    On affine elements with constant toughness every integrand is a polynomial:
-    (1 - z)^2 sigma[u]:e[v] and the drive W zt w have degree 2 order_z + 2 (order_u - 1),
-    the mass terms 2 order_u and 2 order_z, the surface terms at most 2 order_z. P2/P2: 6.
-    ``exact = False`` (a toughness that varies, a split's non-polynomial energy, curved
-    elements) adds 2.
-    """
-    degree = max(2 * order_z + 2 * max(order_u - 1, 0), 2 * order_u, 2 * order_z)
-    return degree if exact else degree + 2

@@ -11,8 +11,8 @@ finishes first (measured with ngsolve 6.2.2608; docs/theory.md, "Reproducibility
 
 Assembly (``BilinearForm.Assemble``, ``LinearForm.Assemble``), ``GridFunction.Set``,
 matrix-vector products and element-wise integrals are bitwise reproducible with threads. So
-ngfrac enters the TaskManager only around those (:func:`parallel`), factorizes and solves with
-one thread (:func:`serial`), and sums integrals element by element (:func:`integrate`). A run
+ngfrac enters the TaskManager only around those (:func:`threaded`), factorizes and solves with
+one thread (:func:`single_thread`), and sums integrals element by element (:func:`integrate`). A run
 of a scene then gives the same bits every time with a given thread count.
 ``discretization.threaded_solves = true`` runs a whole step inside the TaskManager instead:
 faster on many cores, not reproducible bitwise.
@@ -27,13 +27,13 @@ from typing import Any, Iterator
 
 import ngsolve as ngs
 
-from ..parallel.communicator import sum_over_ranks
+from .ranks import sum_over_ranks
 
-__all__ = ["ThreadPolicy", "integrate", "parallel", "serial"]
+__all__ = ["ThreadPolicy", "integrate", "single_thread", "threaded"]
 
 
 @contextmanager
-def parallel() -> Iterator[None]:
+def threaded() -> Iterator[None]:
     """NGSolve's threads for the enclosed kernels (a no-op inside an active TaskManager).
 
     Use it only around kernels whose result does not depend on the schedule: assembly,
@@ -44,7 +44,7 @@ def parallel() -> Iterator[None]:
 
 
 @contextmanager
-def serial() -> Iterator[None]:
+def single_thread() -> Iterator[None]:
     """One NGSolve thread for the enclosed code (call it outside any TaskManager).
 
     Sparse factorizations and solves inside it are bitwise reproducible.
@@ -80,7 +80,7 @@ class ThreadPolicy:
         for the whole of it, and inside it :meth:`solves` and :meth:`assembly` enter nothing
         (two OS threads must not enter the TaskManager, and ``SetNumThreads`` is global).
         NGSolve releases the GIL in assembly and factorization, so the two use two cores."""
-        with serial():
+        with single_thread():
             self._section.set()
             try:
                 yield
@@ -89,20 +89,20 @@ class ThreadPolicy:
 
     def step(self) -> AbstractContextManager:
         """The context of a whole step: the TaskManager when solves are threaded, else none."""
-        return parallel() if self.threaded_solves else nullcontext()
+        return threaded() if self.threaded_solves else nullcontext()
 
     def solves(self) -> AbstractContextManager:
         """The context of factorizations, solves, estimators and remeshing."""
         if self.threaded_solves or self._section.is_set():
             return nullcontext()
-        return serial()
+        return single_thread()
 
     def assembly(self, preconditioner: object = None) -> AbstractContextManager:
         """Threads for an assembly, unless it also sets up a registered preconditioner
         (BDDC factorizes inside the assembly) or runs beside another (:meth:`concurrently`)."""
         if self._section.is_set():
             return nullcontext()
-        return parallel() if preconditioner is None else self.solves()
+        return threaded() if preconditioner is None else self.solves()
 
 
 def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,
@@ -112,7 +112,7 @@ def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.V
     Each component is integrated element by element (threaded, bitwise reproducible) and the
     element values are summed with :func:`math.fsum` (correctly rounded, order independent);
     on a distributed mesh the ranks' sums are summed the same way
-    (:func:`ngfrac.parallel.communicator.sum_over_ranks`).
+    (:func:`ngfrac.fem.ranks.sum_over_ranks`).
 
     Parameters
     ----------
@@ -138,7 +138,7 @@ def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.V
         kwargs["definedon"] = definedon
     components = [cf] if cf.dim == 1 else [cf[i] for i in range(cf.dim)]
     values = []
-    with parallel():
+    with threaded():
         for component in components:
             per_element = ngs.Integrate(component, mesh, vb, **kwargs)
             values.append(math.fsum(per_element.NumPy()))

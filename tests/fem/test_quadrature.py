@@ -1,4 +1,4 @@
-"""The forms' quadrature (ngfrac.solve.spaces.quadrature_order) integrates every form exactly
+"""The forms' quadrature (ngfrac.mesh.fields.quadrature_order) integrates every form exactly
 on affine elements with constant toughness: assembling with it or with a rule four orders
 higher gives the same matrices and vectors to round-off."""
 import numpy as np
@@ -6,7 +6,7 @@ import ngsolve as ngs
 import pytest
 from netgen.geom2d import unit_square
 
-from ngfrac.solve.spaces import dx_of_order, quadrature_order
+from ngfrac.fem.quadrature import dx_of_order, quadrature_order
 
 
 @pytest.mark.parametrize("order_u, order_z", [(1, 1), (2, 2), (1, 2), (3, 2)])

@@ -7,8 +7,8 @@ import ngsolve as ngs
 import numpy as np
 import pytest
 
-from ngfrac.mesh.cad import OccDomain
-from ngfrac.mesh.domains import CRACK_BOUNDARY, Domain, domain_of
+from ngfrac.geometry.cad import OccDomain
+from ngfrac.geometry.domains import CRACK_BOUNDARY, Domain, domain_of
 from ngfrac.scene import Geometry, Scene, SceneError
 
 R = 0.2

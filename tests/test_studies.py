@@ -1,4 +1,4 @@
-"""ngfrac.post.studies.convergence_study: the manufactured u-solve study, rate fitting on synthetic
+"""ngfrac.studies.convergence_study: the manufactured u-solve study, rate fitting on synthetic
 data, and clear errors for bad keys and values."""
 import math
 
@@ -6,10 +6,10 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
-from ngfrac.mesh.domains import build_mesh
+from ngfrac.geometry.domains import build_mesh
 from ngfrac.scene import SceneError
 from ngfrac.solve.stepper import PhaseFieldStepper
-from ngfrac.post.studies import StudyRun, convergence_study, fit_rate, scene_with
+from ngfrac.studies import StudyRun, convergence_study, fit_rate, scene_with
 
 from ngfrac.testing.manufactured import u_scene as u_solve_scene
 from ngfrac.testing.scenes import quick_slit

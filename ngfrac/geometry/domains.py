@@ -8,7 +8,7 @@ exp(-d/epsilon) has a kink on the crack; on an aligned mesh its P2 interpolant i
 each side and the surface energy is accurate (docs/theory.md, "Crack-aligned meshes").
 Nothing else in ngfrac does width/height arithmetic; :func:`domain_of` builds the domain of a
 scene's ``geometry`` section. CAD domains (``geometry.kind = "occ"``, any netgen.occ shape)
-are :class:`ngfrac.mesh.cad.OccDomain`.
+are :class:`ngfrac.geometry.cad.OccDomain`.
 """
 from __future__ import annotations
 
@@ -19,10 +19,9 @@ from typing import Any, ClassVar, Protocol, Sequence, runtime_checkable
 import numpy as np
 import ngsolve as ngs
 
-from ..scene import Geometry
 
 __all__ = ["CRACK_BOUNDARY", "BOUNDARY_TOL", "MeshingError", "Domain", "Rectangle", "Box",
-           "domain_of", "occ_domain_of", "netgen_geometry", "build_mesh", "crack_polygon_faces"]
+           "domain_of", "netgen_geometry", "build_mesh", "crack_polygon_faces"]
 
 CRACK_BOUNDARY = "crack"
 """Name of the interior mesh edges (2D) or faces (3D) that follow the initial cracks."""
@@ -361,68 +360,24 @@ def crack_polygon_faces(cracks: Cracks, tol: float) -> list[Any]:
     return faces
 
 
-def domain_of(geometry: Geometry | Domain) -> Domain:
-    """The domain of a scene's ``geometry`` section (a domain is returned as it is)."""
-    if not isinstance(geometry, Geometry):
-        if isinstance(geometry, Domain):
-            return geometry
-        raise TypeError(f"need a scene Geometry or a Domain, got {type(geometry).__name__}")
-    if geometry.kind == "box":
-        return Box(geometry.width, geometry.height, geometry.depth, tuple(geometry.origin))
-    if geometry.kind == "rectangle":
-        return Rectangle(geometry.width, geometry.height, tuple(geometry.origin))
-    if geometry.kind == "occ":
-        return geometry.domain()  # built once per section (OCC work), kept there
-    raise ValueError(f"no domain for geometry.kind = {geometry.kind!r}")
+def domain_of(geometry: Any) -> Domain:
+    """The domain of ``geometry``: a :class:`Domain` as it is, or what a description of one
+    (a scene's ``geometry`` section, :meth:`ngfrac.scene.Geometry.domain`) builds."""
+    if isinstance(geometry, Domain):
+        return geometry
+    build = getattr(geometry, "domain", None)
+    if callable(build):
+        return build()
+    raise TypeError(f"need a scene Geometry or a Domain, got {type(geometry).__name__}")
 
 
-def occ_domain_of(geometry: Geometry) -> Domain:
-    """The :class:`~ngfrac.mesh.cad.OccDomain` of a ``geometry.kind = "occ"`` section: its
-    shapes or file, with the boundaries named by its selectors.
-
-    Raises
-    ------
-    SceneError
-        A selector matches nothing, two names claim one part, the file is missing or cannot
-        be read, or the shapes (the file) leave no face or solid or several separate pieces.
-    """
-    from ..scene import SceneError
-    from .cad import (BoundaryConflict, EmptyShape, UnreadableFile, connected_pieces,
-                      name_boundaries, read_shape, shape_from_specs, split_edges)
-
-    try:
-        shape = (read_shape(geometry.file, geometry.scale) if geometry.file
-                 else shape_from_specs(geometry.shapes))
-    except (FileNotFoundError, UnreadableFile) as err:
-        raise SceneError(f"geometry.file = {geometry.file!r}: {err}") from None
-    except EmptyShape as err:
-        prefix = f"geometry.file = {geometry.file!r}: " if geometry.file else "geometry."
-        raise SceneError(f"{prefix}{err}") from None
-    except Exception as err:  # OCC raises plain Exceptions for bad shapes or files
-        what = f"file = {geometry.file!r}" if geometry.file else "shapes"
-        text = " ".join(str(err).split())  # one line: OCC's messages span several
-        raise SceneError(f"geometry.{what}: OCC could not build the shape ({text})") from None
-    pieces = connected_pieces(shape)
-    if pieces > 1:  # each piece would need its own supports: a singular u-problem otherwise
-        source = f"geometry.file = {geometry.file!r} holds" if geometry.file else "geometry.shapes make"
-        raise SceneError(f"{source} {pieces} separate pieces (a cut through the domain, or a "
-                         "shape that touches no other); ngfrac meshes one connected part: "
-                         "join or remove the pieces")
-    try:
-        if geometry.split_points:
-            shape = split_edges(shape, geometry.split_points)
-        return name_boundaries(shape, geometry.boundaries, geometry.default_boundary)
-    except BoundaryConflict as err:
-        raise SceneError(str(err)) from None
-
-
-def netgen_geometry(geometry: Geometry | Domain, cracks: Cracks = ()) -> Any:
+def netgen_geometry(geometry: Any, cracks: Cracks = ()) -> Any:
     """The Netgen geometry of a scene geometry with the cracks embedded
     (:meth:`Domain.netgen_geometry`)."""
     return domain_of(geometry).netgen_geometry(cracks)
 
 
-def build_mesh(geometry: Geometry | Domain, maxh: float, cracks: Cracks = ()) -> ngs.Mesh:
+def build_mesh(geometry: Any, maxh: float, cracks: Cracks = ()) -> ngs.Mesh:
     """A quasi-uniform mesh of a scene geometry, aligned with the cracks
     (:meth:`Domain.build_mesh`).
 

@@ -1,4 +1,4 @@
-"""u_solver = 'cg' (CG with BDDC, ngfrac.solve.linear) against the sparse direct solver."""
+"""u_solver = 'cg' (CG with BDDC, ngfrac.fem.linear) against the sparse direct solver."""
 import numpy as np
 import pytest
 

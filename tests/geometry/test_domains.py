@@ -1,10 +1,10 @@
-"""Domains as objects (ngfrac.mesh.domains): Rectangle and Box, and domain_of a scene geometry."""
+"""Domains as objects (ngfrac.geometry.domains): Rectangle and Box, and domain_of a scene geometry."""
 import math
 
 import numpy as np
 import pytest
 
-from ngfrac.mesh.domains import (CRACK_BOUNDARY, Box, Domain, MeshingError, Rectangle,
+from ngfrac.geometry.domains import (CRACK_BOUNDARY, Box, Domain, MeshingError, Rectangle,
                                  build_mesh, domain_of)
 from ngfrac.scene import Geometry
 

@@ -1,4 +1,4 @@
-"""CAD domains: any netgen.occ shape as a :class:`~ngfrac.mesh.domains.Domain`.
+"""CAD domains: any netgen.occ shape as a :class:`~ngfrac.geometry.domains.Domain`.
 
 A 2D domain is a face (or faces) in the plane z = 0, a 3D domain a solid. Boundary names are
 the names of the shape's edges (2D) or faces (3D), as a STEP file or ``shape.edges[i].name``
@@ -71,7 +71,7 @@ class OccDomain:
         Name of the parts left unnamed.
     curved_order : int
         ``build_mesh`` curves its meshes to this order (0: straight) where the geometry is
-        curved; :class:`ngfrac.solve.spaces.MeshFields` curves to the order of u.
+        curved; :class:`ngfrac.mesh.fields.MeshFields` curves to the order of u.
 
     Examples
     --------
@@ -188,7 +188,7 @@ class OccDomain:
 
     def build_mesh(self, maxh: float, cracks: Any = ()) -> ngs.Mesh:
         """A quasi-uniform mesh of element size ``maxh`` with edges (faces) along the cracks
-        (straight elements: :class:`~ngfrac.solve.spaces.MeshFields` curves them).
+        (straight elements: :class:`~ngfrac.mesh.fields.MeshFields` curves them).
 
         Raises
         ------

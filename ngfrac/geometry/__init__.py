@@ -1,0 +1,1 @@
+"""Domains: Netgen geometries with the initial cracks embedded (rectangles, boxes, CAD shapes)."""

@@ -1,0 +1,120 @@
+"""The seam between one process and many: what the stepper, its sub-problems and the writers
+ask of the processes of a run (:class:`Communicator`), and the one-process answer
+(:class:`Serial`, :data:`SERIAL`). The MPI answer is :class:`ngfrac.parallel.MPICommunicator`.
+"""
+from __future__ import annotations
+
+import contextlib
+from typing import TYPE_CHECKING, Any, Callable, Protocol
+
+import ngsolve as ngs
+
+if TYPE_CHECKING:
+    from ..mesh.adapter import MeshAdapter
+    from ..mesh.fields import MeshFields
+    from ..physics.crack_models import CrackModel
+    from ..post.crackset import CrackSet
+    from ..scene import Scene
+    from .crack_tracking import CrackTracker
+    from .state import StepperState
+    from .stepper import PhaseFieldStepper
+
+__all__ = ["SERIAL", "Communicator", "ParallelError", "Serial"]
+
+
+class ParallelError(RuntimeError):
+    """A scene or a launch that cannot run distributed (yet); the message says what to do."""
+
+
+class Communicator(Protocol):
+    """What the stepper and its sub-problems ask of the processes of a run."""
+
+    size: int
+    rank: int
+    is_root: bool
+    distributed: bool
+
+    def check(self, scene: "Scene") -> None: ...
+    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
+    def u_solver(self, solver: str) -> str: ...
+    def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter": ...
+    def max(self, value: float) -> float: ...
+    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet": ...
+    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]: ...
+    def counts(self, fields: "MeshFields") -> tuple[int, int]: ...
+    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager: ...
+    def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState | None": ...
+    def gather_view(self, stepper: "PhaseFieldStepper") -> Any: ...
+    def broadcast(self, value: Any) -> Any: ...
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any: ...
+    def barrier(self) -> None: ...
+
+
+class Serial:
+    """One process: every answer is the serial code path."""
+
+    size = 1
+    rank = 0
+    is_root = True
+    distributed = False
+
+    def check(self, scene: "Scene") -> None:
+        """Nothing to refuse: every scene runs on one process."""
+
+    def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
+        """The mesh ``build()`` makes."""
+        return build()
+
+    def u_solver(self, solver: str) -> str:
+        """The scene's ``discretization.u_solver``."""
+        return solver
+
+    def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter":
+        """The adapter of an adaptive scene: :class:`~ngfrac.mesh.adapter.MeshAdapter`."""
+        from ..mesh.adapter import MeshAdapter
+
+        return MeshAdapter(scene, crack_model)
+
+    def max(self, value: float) -> float:
+        return value
+
+    def crack(self, tracker: "CrackTracker", fields: "MeshFields") -> "CrackSet":
+        """The tracker's crack set of the fields' z."""
+        return tracker.crack(fields)
+
+    def size_range(self, tracker: "CrackTracker", fields: "MeshFields") -> tuple[float, float]:
+        """The smallest and the largest element diameter."""
+        sizes = tracker.element_sizes(fields)
+        return float(sizes.min()), float(sizes.max())
+
+    def counts(self, fields: "MeshFields") -> tuple[int, int]:
+        """Vertices of the mesh and unknowns of u and z."""
+        return fields.mesh.nv, fields.ndof
+
+    def guard(self, exit_code: Callable[[BaseException], int]) -> contextlib.AbstractContextManager:
+        """Errors propagate as they are."""
+        return contextlib.nullcontext()
+
+    def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState":
+        """The stepper's own :meth:`~ngfrac.solve.stepper.PhaseFieldStepper.state`."""
+        return stepper.state()
+
+    def gather_view(self, stepper: "PhaseFieldStepper") -> "PhaseFieldStepper":
+        """The stepper itself: its scene, mesh, u, z, k and t are the serial ones."""
+        return stepper
+
+    def broadcast(self, value: Any) -> Any:
+        """``value`` (rank 0's, on every rank)."""
+        return value
+
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> None:
+        """None: on one process the z-problem assembles K, M and the drive apart and
+        factorizes (:mod:`ngfrac.solve.z_problem`)."""
+        return None
+
+    def barrier(self) -> None:
+        """Nothing to wait for."""
+
+
+SERIAL = Serial()
+"""The communicator of a run on one process."""
