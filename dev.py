@@ -5,6 +5,10 @@
     python3 dev.py test     # runs the test suite (extra arguments go to pytest)
                             # on every core: see test_workers()
     python3 dev.py docs     # builds the HTML docs into docs/_build/html (arguments: sphinx-build)
+    python3 dev.py run SCENE.toml --out DIR ...   # `ngfrac run ...` with the ngfrac of .venv
+    python3 dev.py ngfrac check SCENE.toml        # any ngfrac command (check, plot, run)
+    python3 dev.py mpi N SCENE.toml --out DIR ... # `ngfrac run ...` on N MPI processes (mpiexec
+                                                  # of .venv's MPI with the flags it needs)
 
 Only the Python standard library is used here, so this works on a machine
 that has nothing but Python 3.11 and pip.
@@ -12,6 +16,7 @@ that has nothing but Python 3.11 and pip.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import subprocess
 import sys
@@ -88,12 +93,39 @@ def test_workers(pytest_args: list[str], environ: dict[str, str]) -> tuple[list[
     return ["-n", str(workers), "--dist", "loadfile", *pytest_args], environ
 
 
+USAGE = ("usage: python3 dev.py demo | test [pytest arguments] | docs [sphinx-build arguments] "
+         "| run [ngfrac run arguments] | ngfrac [ngfrac arguments] "
+         "| mpi N [ngfrac run arguments]")
+COMMANDS = ("demo", "test", "docs", "run", "ngfrac", "mpi")
+
+
+def mpi_command(python: Path, processes: str, arguments: list[str]) -> list[str]:
+    """``mpiexec`` of the MPI that mpi4py loads in .venv, with the flags it needs (more
+    processes than cores, root), running ``ngfrac run ARGUMENTS`` on ``processes`` processes.
+    Exits 2 with one line when .venv has no usable MPI."""
+    probe = subprocess.run([python, "-c", "import json; from ngfrac.parallel import "
+                            "mpiexec_command; print(json.dumps(mpiexec_command()))"],
+                           capture_output=True, text=True)
+    launcher = json.loads(probe.stdout) if probe.returncode == 0 and probe.stdout.strip() else None
+    if not launcher:
+        sys.exit("dev.py mpi: no MPI launcher matching mpi4py in .venv (pip install -e .[mpi])")
+    return [*launcher, "-np", processes, str(python), "-m", "ngfrac", "run", *arguments]
+
+
 def main(argv: list[str]) -> int:
-    if not argv or argv[0] not in ("demo", "test", "docs"):
-        print("usage: python3 dev.py demo | test [pytest arguments] "
-              "| docs [sphinx-build arguments]", file=sys.stderr)
+    if not argv or argv[0] not in COMMANDS:
+        print(USAGE, file=sys.stderr)
+        return 2
+    if argv[0] == "mpi" and (len(argv) < 2 or not argv[1].isdigit()):
+        print("usage: python3 dev.py mpi N [ngfrac run arguments], e.g. python3 dev.py mpi 3 "
+              "demos/mode3_slit.toml --out out/mpi", file=sys.stderr)
         return 2
     python = ensure_environment()
+    if argv[0] in ("run", "ngfrac"):  # in the caller's folder: relative paths stay as given
+        command = [python, "-m", "ngfrac", *(["run"] if argv[0] == "run" else []), *argv[1:]]
+        return subprocess.run(command).returncode
+    if argv[0] == "mpi":
+        return subprocess.run(mpi_command(python, argv[1], argv[2:])).returncode
     if argv[0] == "demo":
         command = [python, "-m", "ngfrac", "run", "demos/mode3_slit.toml",
                    "--out", "out/mode3_slit", "--overwrite", *argv[1:]]

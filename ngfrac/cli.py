@@ -14,15 +14,20 @@ import logging
 import sys
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .io.checkpoint import CheckpointError
 from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .geometry.domains import MeshingError
 from .io.output import OutputError
 from .io.hdf5 import ResultsError
-from .parallel.communicator import ParallelError, launched_rank
+from .parallel.communicator import launched_rank
+from .solve.communicator import ParallelError
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
+
+if TYPE_CHECKING:
+    from .solve.records import StepRecord
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
@@ -31,6 +36,56 @@ STRICT_HELP = "treat resolution warnings as errors (exit 2)"
 
 class _Strict(Exception):
     """--strict and the scene has resolution warnings (already printed)."""
+
+
+class _Interrupted(Exception):
+    """Ctrl-C during a run: the message says how to continue it."""
+
+
+def _check_scene_path(path: str) -> None:
+    """A scene argument that is a folder: say what to give instead (one line)."""
+    if Path(path).is_dir():
+        hint = (f"; to continue the run in it: ngfrac run --restart {path}"
+                if (Path(path) / "scene.toml").is_file() else "")
+        raise SceneError(f"{path!r} is a folder, not a scene file; give a scene file (TOML)"
+                         f"{hint}")
+
+
+def _check_run_folder(folder: Path, option: str) -> None:
+    """The folder of ``--restart`` exists and holds a run (its scene.toml)."""
+    if not folder.is_dir():
+        raise OutputError(f"{option} {str(folder)!r}: no such run folder; give the --out "
+                          "folder of an earlier ngfrac run")
+    if not (folder / "scene.toml").is_file():
+        raise OutputError(f"{option} {str(folder)!r} is not a run folder (no scene.toml); give "
+                          "the --out folder of an earlier ngfrac run")
+
+
+def _interrupted(out: Path) -> str:
+    """The line for a run stopped by Ctrl-C: from which step ``--restart`` continues it."""
+    import h5py
+
+    path = out / "checkpoint.h5"
+    try:
+        with h5py.File(path, "r") as f:
+            step, t = int(f.attrs["k"]), float(f.attrs["t"])
+    except (OSError, KeyError, ValueError):
+        return (f"interrupted; no checkpoint in {str(out)!r} to continue from (they are "
+                "written every output.checkpoint_every steps): run it again with --overwrite")
+    return (f"interrupted; ngfrac run --restart {out} continues from step {step} "
+            f"(t = {t:.6g}), its last checkpoint")
+
+
+def summary_line(scene: Scene, last: "StepRecord", out: Path) -> str:
+    """The line ``ngfrac run`` prints at the end: steps, time, the crack's geometric length
+    (2D: ``path_length``) before the Gamma-functional ``crack_length``, the tip, the folder."""
+    tip = ", ".join(f"{v:.3f}" for v in (last.tip_x, last.tip_y, last.tip_z) if v == v)
+    dim = scene.geometry.dim
+    measured = "area" if dim == 3 else "length"
+    geometric = (f"crack path length {last.path_length:.4f}, " if dim == 2 else "")
+    return (f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
+            f"{geometric}Gamma-functional crack {measured} {last.crack_length:.4f}, "
+            f"tip ({tip}); results in {out}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,12 +99,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", nargs="?", help="scene file (TOML)")
     run.add_argument("--out", help="output folder (required unless --restart)")
     run.add_argument("--restart", metavar="DIR", help="continue the run in DIR (or DIR/checkpoint.h5) "
-                     "from its last checkpoint; --set may extend time.t_end")
+                     "from its last checkpoint (one is written at the end of every run); --set "
+                     "may extend time.t_end")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set time.t_end=0.05 (repeatable)")
     run.add_argument("--overwrite", action="store_true", help="replace an earlier run in --out")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
-    run.add_argument("--no-plots", action="store_true", help="skip history.png and crack.png")
+    run.add_argument("--no-plots", action="store_true",
+                     help="skip history.png, crack.png and force_displacement.png")
     run.add_argument("--profile", action="store_true", help="print the wall time of each phase at the end")
     run.add_argument("--strict", action="store_true", help=STRICT_HELP)
     run.add_argument("-v", "--verbose", action="store_true", help="log at INFO level")
@@ -86,6 +143,8 @@ def _plot(args: argparse.Namespace) -> int:
     if not (folder / "history.csv").is_file():
         raise OutputError(f"{str(folder)!r} is not a run folder (no history.csv); give the "
                           "--out folder of an ngfrac run")
+    if args.times:
+        _check_plot_times(folder, args.times)
     manifest = Manifest.load(folder) or Manifest.adopt(folder)
     foreign = manifest.foreign("plots/")
     if foreign:
@@ -103,6 +162,24 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_plot_times(folder: Path, times: list[float]) -> None:
+    """``--times`` within the run's snapshots (a time between two takes the nearest)."""
+    from .io.results import open_results
+
+    if not (folder / "results.h5").is_file():
+        raise OutputError(f"--times: {str(folder)!r} has no results.h5 (output.results = "
+                          "false), so no phase-field pictures; leave out --times")
+    available = open_results(folder / "results.h5").snapshot_times()
+    if not len(available):
+        raise OutputError(f"--times: {str(folder / 'results.h5')!r} holds no snapshot")
+    first, last = float(available.min()), float(available.max())
+    slack = 1e-9 * max(abs(first), abs(last), 1.0)
+    outside = [t for t in times if not first - slack <= t <= last + slack]
+    if outside:
+        raise OutputError(f"--times {outside[0]:g} is outside the run's snapshots "
+                          f"(t = {first:g} to {last:g}); give times in that range")
+
+
 def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     if launched_rank() == 0:  # under mpirun every rank fails alike: one line
         print(f"ngfrac: error: {message}", file=sys.stderr)
@@ -110,7 +187,13 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
 
 
 def _warn_resolution(scene: Scene, strict: bool) -> None:
-    """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2)."""
+    """Print the scene's resolution warnings, one line each; with --strict, stop (exit 2).
+    Also the rate warning of alpha2 (:func:`ngfrac.scene.rates.rate_warnings`), which
+    --strict leaves a warning (a large alpha2 may be meant: demos/sneddon.toml)."""
+    from .scene.rates import rate_warnings
+
+    for message in rate_warnings(scene) if launched_rank() == 0 else ():
+        print(f"ngfrac: warning: {message}", file=sys.stderr)
     found = resolution_warnings(scene)
     for message in found if launched_rank() == 0 else ():
         print(f"ngfrac: warning: {message}", file=sys.stderr)
@@ -120,22 +203,32 @@ def _warn_resolution(scene: Scene, strict: bool) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .io.writers import Progress
-    from .runner import run_scene
-
     if bool(args.scene) == bool(args.restart):
         raise SceneError("give a scene file to run, or --restart DIR to continue a run (not both)")
     if args.restart:
         folder = Path(args.restart)
         folder = folder.parent if folder.suffix == ".h5" else folder
+        _check_run_folder(folder, "--restart")
         scene = load_scene(folder / "scene.toml", args.overrides)
         out = folder
     else:
         if not args.out:
             raise SceneError("--out DIR is required: the folder the run writes into")
+        _check_scene_path(args.scene)
         scene = load_scene(args.scene, args.overrides)
         out = Path(args.out)
     _warn_resolution(scene, args.strict)
+    try:
+        return _run_scene(args, scene, out)
+    except KeyboardInterrupt:
+        raise _Interrupted(_interrupted(out)) from None
+
+
+def _run_scene(args: argparse.Namespace, scene: Scene, out: Path) -> int:
+    """The run of ``ngfrac run`` once its scene is read and checked; prints the summary."""
+    from .io.writers import Progress
+    from .runner import run_scene
+
     with warnings.catch_warnings():  # printed above, once
         warnings.simplefilter("ignore", ResolutionWarning)
         summary = run_scene(scene, out, overwrite=args.overwrite, plots=not args.no_plots,
@@ -144,9 +237,7 @@ def _run(args: argparse.Namespace) -> int:
     last = summary.last
     if launched_rank() != 0:
         return 0
-    print(f"{scene.name}: {last.step} steps to t = {last.t:.4g} in {last.wall_s:.1f} s; "
-          f"crack length {last.crack_length:.4f}, tip ({last.tip_x:.3f}, {last.tip_y:.3f}); "
-          f"results in {summary.out_dir}")
+    print(summary_line(scene, last, summary.out_dir))
     if args.profile:
         print(summary.profile)
     return 0
@@ -161,6 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "plot":
             return _plot(args)
         if args.command == "check":
+            _check_scene_path(args.scene)
             scene = load_scene(args.scene, args.overrides)
             _warn_resolution(scene, args.strict)
             print(f"{args.scene}: scene {scene.name!r} is valid ({scene.time.n_steps} steps, "
@@ -171,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(str(err))
     except (SolverError, MeshingError) as err:
         return _fail(str(err), EXIT_SOLVER)
+    except _Interrupted as err:
+        return _fail(str(err), 130)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
 

@@ -90,10 +90,27 @@ def _open(scene: Scene, out: Path, overwrite: bool, restart: bool, comm: Communi
         if not path.exists():
             raise OutputError(_no_checkpoint(out))
         stepper = resume(path, scene)
+    _check_cad_copy(out)
     manifest = Manifest.load(out) or Manifest.adopt(out)
     manifest.save()
     info = record_restart(out, scene, stepper, manifest)
     return stepper, RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
+
+
+def _check_cad_copy(out: Path) -> None:
+    """The run folder's copy of the CAD file is the one the run read (run.json's sha256)."""
+    from .io.output import file_sha256
+
+    cad = (read_run_json(out) or {}).get("cad_file")
+    if not isinstance(cad, dict) or not cad.get("name"):
+        return
+    copy = out / str(cad["name"])
+    if not copy.is_file():
+        raise OutputError(f"{str(copy)!r} is missing: the run read its CAD file from there; "
+                          f"copy {cad.get('source')!r} back to it")
+    if file_sha256(copy) != cad.get("sha256"):
+        raise OutputError(f"{str(copy)!r} changed since the run read it (its SHA-256 differs "
+                          "from run.json's cad_file); restore it to continue the run")
 
 
 def _no_checkpoint(out: Path) -> str:
@@ -142,13 +159,16 @@ def record_restart(out: Path, scene: Scene, stepper: PhaseFieldStepper,
         old = _flat_keys(tomllib.loads(stored.read_text())) if stored.exists() else None
     except (OSError, tomllib.TOMLDecodeError):
         old = None
-    new = _flat_keys(scene.to_dict())
+    from .io.output import portable_scene_dict
+
+    stored_dict = portable_scene_dict(scene.to_dict(), out)  # the CAD copy by its name
+    new = _flat_keys(stored_dict)
     changed = {} if old is None else {key: [old.get(key), new.get(key)]
                                       for key in sorted(set(old) | set(new))
                                       if old.get(key) != new.get(key)}
     if changed or old is None:
         with manifest.writing("scene.toml") if manifest else contextlib.nullcontext():
-            atomic_write_text(stored, to_toml(scene.to_dict()))
+            atomic_write_text(stored, to_toml(stored_dict))
     info = read_run_json(out) or {"scene": scene.name}
     info.setdefault("restarts", []).append(
         {**run_metadata(), "from_step": int(stepper.k), "from_t": float(stepper.t),

@@ -317,22 +317,34 @@ def check_format(handle: h5py.File, path: Path, fmt: str, version: int, kind: st
     return found
 
 
-def scene_from_toml(text: str, path: Path, error: type[RuntimeError]) -> Scene:
-    """The Scene stored as TOML text in a results or checkpoint file."""
+def scene_from_toml(text: str, path: Path, error: type[RuntimeError],
+                    folder: Path | None = None) -> Scene:
+    """The Scene stored as TOML text in a results or checkpoint file (a relative
+    ``geometry.file`` found in ``folder`` is read from there)."""
+    from .output import resolve_scene_file
+
     try:
-        return Scene.from_dict(tomllib.loads(text))
+        data = tomllib.loads(text)
+        return Scene.from_dict(data if folder is None else resolve_scene_file(data, folder))
     except (tomllib.TOMLDecodeError, SceneError) as err:
         raise error(f"{str(path)!r} holds a scene that does not load ({err})") from None
 
 
-def scene_text(scene: Scene) -> str:
-    """The resolved scene as the TOML text stored in files."""
-    return to_toml(scene.to_dict())
+def scene_text(scene: Scene, folder: Path | None = None) -> str:
+    """The resolved scene as the TOML text stored in files (in ``folder``: a CAD file copied
+    there named relative to it)."""
+    from .output import portable_scene_dict
+
+    data = scene.to_dict()
+    return to_toml(data if folder is None else portable_scene_dict(data, folder))
 
 
 def write_scene(handle: h5py.File, scene: Scene) -> None:
-    """Store the scene as TOML text with a checksum (text datasets have no checksum filter)."""
-    text = scene_text(scene)
+    """Store the scene as TOML text with a checksum (text datasets have no checksum filter).
+
+    A ``geometry.file`` copied into the file's folder (a run folder) is stored by its name,
+    relative to that folder (:func:`~ngfrac.io.output.portable_scene_dict`)."""
+    text = scene_text(scene, Path(handle.filename).parent)
     handle.create_dataset("scene", data=text, dtype=h5py.string_dtype())
     handle["scene"].attrs["sha256"] = hashlib.sha256(text.encode()).hexdigest()
 
@@ -343,7 +355,7 @@ def read_scene(handle: h5py.File, path: Path, error: type[RuntimeError]) -> tupl
     text = dset.asstr()[()]
     if hashlib.sha256(text.encode()).hexdigest() != dset.attrs.get("sha256"):
         raise error(f"{str(path)!r} is corrupt: its scene text does not match its checksum")
-    return scene_from_toml(text, path, error), text
+    return scene_from_toml(text, path, error, Path(path).parent), text
 
 
 IGNORED_KEYS = ("output", "time.t_end")

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import datetime
+import hashlib
 import json
 import logging
 import math
@@ -42,7 +43,7 @@ LEGACY = ("history.csv", "scene.toml", "history.png", "crack.png", "results.h5",
 """The files (glob patterns) an ngfrac before manifests wrote. A folder without a manifest
 counts as a run when it holds one of them; ``overwrite`` then removes those files (and
 ``vtk/``, ``plots/`` when they are left empty) and nothing else."""
-OWNED = LEGACY + (RUN_JSON, "crack_path.csv", "results.xdmf")
+OWNED = LEGACY + (RUN_JSON, "crack_path.csv", "results.xdmf", "results_mesh_[0-9][0-9][0-9].xdmf")
 """The names ngfrac writes: a user's file at one of them is never replaced."""
 LEGACY_FOLDERS = ("plots/", "vtk/")
 
@@ -277,7 +278,7 @@ class VTKSeries:
 
     Parameters
     ----------
-    folder : Path
+    folder : str or Path
         Where ``fields_00000.vtu``, ... and ``fields.pvd`` go.
     subdivision : int
         Subdivisions per element (order - 1 shows P2 fields faithfully).
@@ -288,8 +289,9 @@ class VTKSeries:
         Warn once when a snapshot's estimated size exceeds this many bytes.
     """
 
-    def __init__(self, folder: Path, subdivision: int, stem: str = "fields",
+    def __init__(self, folder: str | Path, subdivision: int, stem: str = "fields",
                  manifest: Manifest | None = None, large: int = LARGE_SNAPSHOT) -> None:
+        folder = Path(folder)
         self.folder = folder
         self.large = large
         self.subdivision = subdivision
@@ -531,3 +533,71 @@ def write_run_json(folder: str | Path, data: dict[str, Any],
     with manifest.writing(RUN_JSON) if manifest is not None else contextlib.nullcontext():
         atomic_write_text(path, text)
     return path
+
+
+# -- the CAD file of a run --------------------------------------------------------------------
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (hex)."""
+    digest = hashlib.sha256()
+    with Path(path).open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _cad_file(data: dict[str, Any]) -> str | None:
+    """The scene dict's ``geometry.file``, None when the scene reads no CAD file."""
+    geometry = data.get("geometry")
+    file = geometry.get("file") if isinstance(geometry, dict) else None
+    return file if isinstance(file, str) and file and not file.startswith("<") else None
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve() or (
+            a.stat().st_size == b.stat().st_size and file_sha256(a) == file_sha256(b))
+    except OSError:
+        return False
+
+
+def portable_scene_dict(data: dict[str, Any], folder: str | Path) -> dict[str, Any]:
+    """A scene dict as a file in ``folder`` stores it: a ``geometry.file`` whose copy lies in
+    ``folder`` (a run folder's, :func:`copy_cad_file`) is named by its bare name, relative to
+    that folder, so the run folder reads back from any working directory."""
+    file = _cad_file(data)
+    if file is None:
+        return data
+    copy = Path(folder) / Path(file).name
+    if Path(file) == Path(copy.name) or not copy.is_file() or not _same_file(Path(file), copy):
+        return data
+    return {**data, "geometry": {**data["geometry"], "file": copy.name}}
+
+
+def resolve_scene_file(data: dict[str, Any], folder: str | Path) -> dict[str, Any]:
+    """The inverse of :func:`portable_scene_dict` for a scene read from a file in ``folder``:
+    a relative ``geometry.file`` found there is taken from there."""
+    file = _cad_file(data)
+    if file is None or Path(file).is_absolute() or not (Path(folder) / file).is_file():
+        return data
+    return {**data, "geometry": {**data["geometry"], "file": str(Path(folder) / file)}}
+
+
+def copy_cad_file(data: dict[str, Any], folder: Path,
+                  manifest: Manifest | None = None) -> dict[str, Any] | None:
+    """Copy the scene's CAD file (``geometry.file``) into the run folder, so the folder is
+    self-contained (a restart reads the copy); returns run.json's ``cad_file`` entry
+    (``name`` in the folder, ``source`` as given, ``sha256``), None without a CAD file."""
+    import shutil
+
+    file = _cad_file(data)
+    if file is None:
+        return None
+    source, copy = Path(file), folder / Path(file).name
+    if not _same_file(source, copy) or not copy.exists():
+        with manifest.writing(copy.name) if manifest is not None else contextlib.nullcontext():
+            try:
+                shutil.copyfile(source, copy)
+            except OSError as err:
+                raise OutputError(f"cannot copy geometry.file {file!r} into {str(folder)!r} "
+                                  f"({_reason(err)}); choose another --out") from None
+    return {"name": copy.name, "source": file, "sha256": file_sha256(copy)}

@@ -34,31 +34,50 @@ def read_history(path: str | Path) -> dict[str, np.ndarray]:
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
-def plot_history(history_csv: str | Path, png: str | Path) -> Path:
-    """Energies, crack length and tip position, and mesh size over time, in one figure."""
-    h = read_history(history_csv)
+def plot_history(history_csv: str | Path, png: str | Path, units: str = "scene units") -> Path:
+    """Energies, crack length and tip position, and mesh size over time, in one figure.
+
+    The crack panel shows the geometric length first (2D: ``path_length``), then the
+    Gamma-functional ``crack_length`` (which also counts diffuse damage), named as such;
+    axes carry the units of the scene's unit system ``units``
+    (:data:`ngfrac.scene.units.UNIT_SYSTEMS`; 2D energies are per unit thickness).
+    """
+    history_figure(read_history(history_csv), units).savefig(png, dpi=110)
+    return Path(png)
+
+
+def history_figure(h: dict[str, np.ndarray], units: str = "scene units") -> Any:
+    """The Figure of :func:`plot_history` for a history (:func:`read_history`)."""
+    from ..scene.units import unit_system
+
+    system, dim = unit_system(units), 3 if "tip_z" in h else 2
     fig = new_figure(figsize=(10, 7), constrained_layout=True)
     axes = fig.subplots(2, 2)
     ax = axes[0, 0]
     for key in ("E_el", "E_surf", "E_total"):
         ax.plot(h["t"], h[key], label=key)
-    ax.set(xlabel="t", ylabel="energy", title="Energies")
+    ax.set(xlabel="t", ylabel=system.label("energy", system.energy(dim)), title="Energies")
     ax.legend()
     ax = axes[0, 1]
-    ax.plot(h["t"], h["crack_length"], label="crack length")
-    ax.plot(h["t"], h["tip_x"], label="tip x")
-    ax.set(xlabel="t", title="Crack length and tip")
-    ax.legend()
+    measure = "area" if dim == 3 else "length"
+    if "path_length" in h and np.any(np.isfinite(h["path_length"])):
+        ax.plot(h["t"], h["path_length"], lw=2, label="crack path length (geometric)")
+    ax.plot(h["t"], h["crack_length"], "--",
+            label=f"Γ-functional crack {measure} ½∫(ε|∇z|² + z²/ε)")
+    ax.plot(h["t"], h["tip_x"], ":", label="tip x")
+    ax.set(xlabel="t", ylabel=system.label(f"crack {measure}, tip x",
+                                           system.crack_measure(dim) if dim == 2 else ""),
+           title=f"Crack {measure} and tip")
+    ax.legend(fontsize="small")
     ax = axes[1, 0]
     ax.semilogy(h["t"], h["hmin"], label="h min")
     ax.semilogy(h["t"], h["hmax"], label="h max")
-    ax.set(xlabel="t", ylabel="element size", title="Mesh size")
+    ax.set(xlabel="t", ylabel=system.label("element size", system.length), title="Mesh size")
     ax.legend()
     ax = axes[1, 1]
     ax.plot(h["t"], h["nv"])
     ax.set(xlabel="t", ylabel="vertices", title="Number of vertices")
-    fig.savefig(png, dpi=110)
-    return Path(png)
+    return fig
 
 
 def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: str = "",
@@ -94,24 +113,56 @@ def plot_phase_field(mesh, z_vertex_values: np.ndarray, png: str | Path, title: 
     return Path(png)
 
 
-def plot_force_displacement(history: dict[str, np.ndarray], png: str | Path) -> Path | None:
-    """Reaction force against the boundary's mean displacement, one curve per loaded component.
+def force_displacement_curves(history: dict[str, np.ndarray]) -> list[tuple[str, str]]:
+    """The (x, force) column pairs of force_displacement.png.
 
-    Returns None when the history has no force columns.
+    Each force column ``F<c>_<boundary>`` that is not zero throughout, against the mean
+    displacement ``u<c>_<boundary>`` of a boundary that moves; when no loaded boundary
+    moves (a held boundary's reaction, loads by tractions), against ``t``. A held boundary's
+    displacement is 0 at every row: its reaction is drawn against t, or, when another
+    boundary moves, not at all (its force is the moving one's, opposite).
     """
-    curves = [(name, "u" + name[1:]) for name in history
-              if name.startswith("F") and "_" in name and "u" + name[1:] in history]
-    curves = [(f, u) for f, u in curves if np.any(history[f] != 0)]
-    if not curves:
+    forces = [name for name in history
+              if name.startswith("F") and "_" in name and "u" + name[1:] in history
+              and np.any(history[name] != 0)]
+    moving = [(f"u{name[1:]}", name) for name in forces if np.any(history["u" + name[1:]] != 0)]
+    return moving or [("t", name) for name in forces]
+
+
+def plot_force_displacement(history: dict[str, np.ndarray], png: str | Path,
+                            units: str = "scene units") -> Path | None:
+    """Reaction force against the mean displacement of each loaded boundary that moves
+    (:func:`force_displacement_curves`; against t when none moves), with the units of the
+    scene's unit system (2D forces per unit thickness).
+
+    Returns None when the history has no nonzero force column.
+    """
+    fig = force_displacement_figure(history, units)
+    if fig is None:
         return None
-    fig = new_figure(figsize=(6, 4.5), constrained_layout=True)
-    ax = fig.subplots()
-    for force, displacement in curves:
-        ax.plot(history[displacement], history[force], label=f"{force} against {displacement}")
-    ax.set(xlabel="imposed displacement", ylabel="reaction force", title="Force-displacement")
-    ax.legend()
     fig.savefig(png, dpi=110)
     return Path(png)
+
+
+def force_displacement_figure(history: dict[str, np.ndarray],
+                              units: str = "scene units") -> Any | None:
+    """The Figure of :func:`plot_force_displacement` (None without a nonzero force)."""
+    from ..scene.units import unit_system
+
+    curves = force_displacement_curves(history)
+    if not curves:
+        return None
+    system, dim = unit_system(units), 3 if "tip_z" in history else 2
+    fig = new_figure(figsize=(6, 4.5), constrained_layout=True)
+    ax = fig.subplots()
+    for x, force in curves:
+        ax.plot(history[x], history[force], label=f"{force} against {x}")
+    xlabel = ("t (load parameter)" if curves[0][0] == "t"
+              else system.label("mean displacement of the boundary", system.length))
+    ax.set(xlabel=xlabel, ylabel=system.label("reaction force", system.force(dim)),
+           title="Force-displacement")
+    ax.legend()
+    return fig
 
 
 def plot_mesh(coordinates: np.ndarray, cells: np.ndarray, png: str | Path, title: str = "",
@@ -186,6 +237,19 @@ def boundary_outline(coordinates: np.ndarray, facets: np.ndarray) -> np.ndarray:
     return np.asarray(coordinates)[facets][:, :, :2]
 
 
+def _scene_units(folder: Path) -> str:
+    """The ``units`` of the run folder's scene.toml ("scene units" without one)."""
+    import tomllib
+
+    from ..scene.units import SCENE_UNITS, UNIT_SYSTEMS
+
+    try:
+        units = tomllib.loads((folder / "scene.toml").read_text()).get("units", SCENE_UNITS)
+    except (OSError, ValueError):
+        return SCENE_UNITS
+    return units if units in UNIT_SYSTEMS else SCENE_UNITS
+
+
 def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]:
     """All figures of a run folder, into ``folder/plots``: history (energies, crack length and
     tip, mesh size and vertex count: the paper's Fig. 3), force-displacement where the scene
@@ -197,9 +261,10 @@ def plot_run(folder: str | Path, times: list[float] | None = None) -> list[Path]
         raise ValueError(f"{str(folder)!r} is not a run folder (no history.csv)")
     out = folder / "plots"
     out.mkdir(exist_ok=True)
-    written = [plot_history(folder / "history.csv", out / "history.png")]
+    units = _scene_units(folder)
+    written = [plot_history(folder / "history.csv", out / "history.png", units)]
     history = read_history(folder / "history.csv")
-    fd = plot_force_displacement(history, out / "force_displacement.png")
+    fd = plot_force_displacement(history, out / "force_displacement.png", units)
     if fd is not None:
         written.append(fd)
     results_file = folder / "results.h5"

@@ -6,9 +6,11 @@ from the stored arrays, or as plain numpy arrays.
 
 Layout (``format_version`` 1)::
 
-    /                      attrs: format = "ngfrac-results", format_version
+    /                      attrs: format = "ngfrac-results", format_version, units (the
+                           scene's unit system)
     /scene                 the resolved scene as TOML text; attrs: sha256
-    /history               float64 (rows, columns), resizable; attrs: columns
+    /history               float64 (rows, columns), resizable; attrs: columns, units (one
+                           per column)
     /snapshots/00000       attrs: t, step
         mesh/              see :class:`~ngfrac.io.hdf5.MeshArrays` (a hard link to the previous snapshot's
                            mesh group when the mesh did not change)
@@ -19,7 +21,8 @@ Layout (``format_version`` 1)::
 For readers without NGSolve, ``mesh/coordinates`` (nv, dim; attrs: units), ``mesh/cells``
 (triangles or tetrahedra, vertex numbers from 0) and ``vertex_values`` are all a snapshot
 needs (linear per cell); ``results.xdmf`` next to the file lists them for ParaView (XDMF
-reader) as a time series. Lengths are in the scene's units (:data:`~ngfrac.io.hdf5.LENGTH_UNIT`).
+reader) as a time series. The ``units`` attributes name the units of the scene's unit system
+(the top-level key ``units``; "scene units" by default).
 
 Numeric datasets carry Fletcher-32 checksums, so damaged data raises
 :class:`~ngfrac.io.hdf5.ResultsError` instead of being read silently. Meshes, fields and the
@@ -72,7 +75,15 @@ def vertex_values(gf: ngs.GridFunction) -> np.ndarray:
 
 
 FIELD_UNITS = {"u": LENGTH_UNIT, "z": "1"}
-"""The ``units`` attribute of the stored vertex values (other fields: "")."""
+"""The ``units`` attribute of the stored vertex values (other fields: ""); u's is the length
+unit of the scene's ``units`` (:mod:`ngfrac.scene.units`)."""
+
+
+def _column_units(columns: list[str], scene: Scene) -> list[str]:
+    """The ``units`` attribute of /history: one per column (:func:`ngfrac.scene.units.column_units`)."""
+    from ..scene.units import column_units, unit_system
+
+    return column_units(columns, unit_system(scene.units), scene.geometry.dim)
 
 
 # -- writing ----------------------------------------------------------------------------------
@@ -107,16 +118,24 @@ class ResultsWriter:
             raise ResultsError(f"cannot create results file {str(path)!r} ({error_reason(err)})") from None
         f.attrs["format"] = FORMAT
         f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["units"] = scene.units
         write_scene(f, scene)
         # Without given columns the first record names them (its force columns vary by scene).
         n = len(columns) if columns is not None else 0
         history = f.create_dataset("history", shape=(0, n), dtype=np.float64,
                                    maxshape=(None, None), chunks=(64, max(n, 32)), fletcher32=True)
         history.attrs["columns"] = list(columns or [])
+        history.attrs["units"] = _column_units(list(columns or []), scene)
         f.create_group("snapshots")
         f.flush()
         self._attach(path, scene, f)
         self.write_xdmf()  # an index of no snapshots yet: the file exists from the start
+
+    @property
+    def _units(self) -> Any:
+        from ..scene.units import unit_system
+
+        return unit_system(self.scene.units)
 
     def _attach(self, path: Path, scene: Scene, handle: h5py.File) -> None:
         self.path = path
@@ -154,7 +173,7 @@ class ResultsWriter:
         for name in list(f["snapshots"]):
             if int(f["snapshots"][name].attrs["step"]) > step:
                 del f["snapshots"][name]
-        if stored_text != scene_text(scene):  # a longer time.t_end, other [output] keys
+        if stored_text != scene_text(scene, path.parent):  # a longer time.t_end, other [output] keys
             writer.replace_scene(scene)
         f.flush()
         writer.write_xdmf()
@@ -194,6 +213,7 @@ class ResultsWriter:
                                      "writer was made without columns")
                 self.columns = list(record.header())
                 history.attrs["columns"] = self.columns
+                history.attrs["units"] = _column_units(self.columns, self.scene)
             if len(row) != len(self.columns):
                 raise ValueError(f"history row has {len(row)} values, the table has "
                                  f"{len(self.columns)} columns")
@@ -234,13 +254,15 @@ class ResultsWriter:
             else:
                 arrays.write(group.create_group("mesh"))
             self._last_mesh = (arrays, group["mesh"].name)
+            group["mesh/coordinates"].attrs["units"] = self._units.length
             data = group.create_group("fields")
             at_vertices = group.create_group("vertex_values")
             for field_name, gf in fields.items():
                 StoredField.of(gf).write(data, field_name)
                 dset = at_vertices.create_dataset(field_name, data=vertex_values(gf),
                                                   fletcher32=True)
-                dset.attrs["units"] = FIELD_UNITS.get(field_name, "")
+                dset.attrs["units"] = (self._units.length if field_name == "u"
+                                       else FIELD_UNITS.get(field_name, ""))
             self._file.flush()
         self.write_xdmf()
         return name
@@ -250,9 +272,29 @@ class ResultsWriter:
         """``results.xdmf`` next to ``results.h5``."""
         return self.path.with_suffix(".xdmf")
 
+    manifest: Any = None
+    """The run folder's :class:`~ngfrac.io.output.Manifest` (set by the run's writer): the
+    per-mesh XDMF files are listed in it before they are written."""
+
     def write_xdmf(self) -> Path:
-        """(Re)write the XDMF index of the snapshots (ParaView's XDMF reader, meshio)."""
+        """(Re)write the XDMF indexes of the snapshots: ``results.xdmf``, every snapshot with
+        its own grid (ParaView's XDMF reader), and one ``results_mesh_NNN.xdmf`` per mesh
+        with the snapshots on it, as meshio's ``TimeSeriesReader`` reads them (one mesh per
+        file); files of meshes no longer in the results (a restart dropped them) are removed."""
+        per_mesh = mesh_series(self._file)
+        names = [f"{self.path.stem}_mesh_{i:03d}.xdmf" for i in range(len(per_mesh))]
+        folder = self.path.parent
+        listed = (self.manifest.writing(*names) if self.manifest is not None and names
+                  else contextlib.nullcontext())
+        with listed:
+            for name, snapshots in zip(names, per_mesh):
+                atomic_write_text(folder / name, xdmf_text(self._file, self.path.name, snapshots,
+                                                           mesh_grid=True))
         atomic_write_text(self.xdmf_path, xdmf_text(self._file, self.path.name))
+        for stale in sorted(folder.glob(f"{self.path.stem}_mesh_[0-9][0-9][0-9].xdmf")):
+            if stale.name not in names and (self.manifest is None
+                                            or self.manifest.owns(stale.name)):
+                stale.unlink()
         return self.xdmf_path
 
     def _next_number(self) -> int:
@@ -270,34 +312,63 @@ class ResultsWriter:
         self.close()
 
 
-def xdmf_text(handle: h5py.File, h5_name: str) -> str:
-    """An XDMF 3 temporal collection of the snapshots in an open results file: per snapshot
-    the mesh (coordinates, cells) and every ``vertex_values`` dataset as node data."""
-    lines = ['<?xml version="1.0"?>', '<Xdmf Version="3.0">', "  <Domain>",
-             '    <Grid Name="snapshots" GridType="Collection" CollectionType="Temporal">']
-
-    def item(dset: h5py.Dataset, path: str) -> str:
-        kind, precision = ("Int", 4) if dset.dtype.kind == "i" else ("Float", 8)
-        dims = " ".join(str(n) for n in dset.shape)
-        return (f'          <DataItem Dimensions="{dims}" NumberType="{kind}" '
-                f'Precision="{precision}" Format="HDF">{h5_name}:{path}</DataItem>')
-
+def mesh_series(handle: h5py.File) -> list[list[str]]:
+    """The names of the snapshots (with vertex values) in an open results file, grouped by
+    mesh, in order: a snapshot whose mesh group is the previous one's (a hard link) joins its
+    group."""
+    groups: list[list[str]] = []
+    last = None
     for name in sorted(handle["snapshots"]):
         group = handle["snapshots"][name]
         if "vertex_values" not in group:
-            continue  # written before vertex values were stored
+            continue
+        mesh = group["mesh"]
+        if last is None or mesh != last:
+            groups.append([])
+        groups[-1].append(name)
+        last = mesh
+    return groups
+
+
+def xdmf_text(handle: h5py.File, h5_name: str, names: Sequence[str] | None = None,
+              mesh_grid: bool = False) -> str:
+    """An XDMF 3 temporal collection of snapshots in an open results file (``names``, default
+    all): per snapshot its own grid, the mesh (coordinates, cells) and every ``vertex_values``
+    dataset as node data. ``mesh_grid``: also the first snapshot's mesh as a grid of its own
+    before the collection, the layout of meshio's ``TimeSeriesReader`` (all ``names`` on one
+    mesh, :func:`mesh_series`)."""
+    lines = ['<?xml version="1.0"?>', '<Xdmf Version="3.0">', "  <Domain>"]
+
+    def item(dset: h5py.Dataset, path: str, indent: str = "          ") -> str:
+        kind, precision = ("Int", 4) if dset.dtype.kind == "i" else ("Float", 8)
+        dims = " ".join(str(n) for n in dset.shape)
+        return (f'{indent}<DataItem Dimensions="{dims}" NumberType="{kind}" '
+                f'Precision="{precision}" Format="HDF">{h5_name}:{path}</DataItem>')
+
+    def mesh_lines(group: h5py.Group, indent: str) -> list[str]:
         mesh = group["mesh"]
         cells, coordinates = mesh["cells"], mesh["coordinates"]
-        path = group.name
         topology = "Triangle" if coordinates.shape[1] == 2 else "Tetrahedron"
+        geometry = "XY" if coordinates.shape[1] == 2 else "XYZ"
+        return [f'{indent}<Topology TopologyType="{topology}" NumberOfElements="{len(cells)}">',
+                item(cells, f"{group.name}/mesh/cells", indent + "  "), f"{indent}</Topology>",
+                f'{indent}<Geometry GeometryType="{geometry}">',
+                item(coordinates, f"{group.name}/mesh/coordinates", indent + "  "),
+                f"{indent}</Geometry>"]
+
+    snapshots = handle["snapshots"]
+    chosen = [name for name in (sorted(snapshots) if names is None else names)
+              if "vertex_values" in snapshots[name]]  # older files: written before them
+    if mesh_grid and chosen:
+        lines += ['    <Grid Name="mesh" GridType="Uniform">',
+                  *mesh_lines(snapshots[chosen[0]], "      "), "    </Grid>"]
+    lines.append('    <Grid Name="snapshots" GridType="Collection" CollectionType="Temporal">')
+    for name in chosen:
+        group = snapshots[name]
+        path = group.name
         lines += [f'      <Grid Name="{name}" GridType="Uniform">',
                   f'        <Time Value="{float(group.attrs["t"])!r}"/>',
-                  f'        <Topology TopologyType="{topology}" NumberOfElements="{len(cells)}">',
-                  item(cells, f"{path}/mesh/cells"),
-                  "        </Topology>",
-                  f'        <Geometry GeometryType="{"XY" if coordinates.shape[1] == 2 else "XYZ"}">',
-                  item(coordinates, f"{path}/mesh/coordinates"),
-                  "        </Geometry>"]
+                  *mesh_lines(group, "        ")]
         for field_name, dset in group["vertex_values"].items():
             kind = "Scalar" if dset.ndim == 1 else "Vector"
             lines += [f'        <Attribute Name="{field_name}" AttributeType="{kind}" Center="Node">',
@@ -451,4 +522,4 @@ def open_results(path: str | Path) -> Results:
 
 
 __all__ = ["FORMAT_VERSION", "Results", "ResultsWriter", "Snapshot", "SnapshotArrays",
-           "open_results", "vertex_values"]
+           "mesh_series", "open_results", "vertex_values", "xdmf_text"]

@@ -96,12 +96,20 @@ class RunFolder:
     def create(cls, path: str | Path, scene: Scene, overwrite: bool = False) -> "RunFolder":
         """Prepare ``path`` for a new run of ``scene``: the manifest, ``scene.toml`` and
         ``run.json`` (:func:`~ngfrac.io.output.prepare_output_dir` says what ``overwrite``
-        replaces)."""
+        replaces), and a copy of the scene's CAD file (``geometry.file``), which the stored
+        scene names (:func:`~ngfrac.io.output.copy_cad_file`; its SHA-256 in run.json's
+        ``cad_file``)."""
+        from .output import copy_cad_file, portable_scene_dict
+
         path = Path(path)
         manifest = prepare_output_dir(path, overwrite)
+        cad = copy_cad_file(scene.to_dict(), path, manifest)  # the folder is self-contained
         with manifest.writing("scene.toml"):
-            atomic_write_text(path / "scene.toml", to_toml(scene.to_dict()))
+            atomic_write_text(path / "scene.toml",
+                              to_toml(portable_scene_dict(scene.to_dict(), path)))
         info = run_info(scene)
+        if cad is not None:
+            info["cad_file"] = cad
         write_run_json(path, info, manifest)
         return cls(path, manifest, info, restart=False, overwrite=overwrite)
 
@@ -172,6 +180,17 @@ class Writers(Writer):
         self.close()
 
 
+def _times_as_written(record: "StepRecord") -> list[Any]:
+    """The record's row with t and dt to 15 significant digits: t = k tau is a product of
+    floats (0.0009000000000000001 for 9 steps of 1e-4); the nearest 15-digit number is the
+    time the scene meant."""
+    row = list(record.row())
+    for i, name in enumerate(record.header()):
+        if name in ("t", "dt") and isinstance(row[i], float):
+            row[i] = float(f"{row[i]:.15g}")
+    return row
+
+
 class HistoryCSV(Writer):
     """``history.csv``: one row per diagnosed step (a restart keeps the rows up to its step)."""
 
@@ -185,12 +204,12 @@ class HistoryCSV(Writer):
             self.writer = HistoryWriter(self.path, record.header(),
                                         resume_after=stepper.k if self.folder.restart else None)
         if not self.folder.restart:
-            self.writer.write(record.row())
+            self.writer.write(_times_as_written(record))
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if record.has_diagnostics and self.writer is not None:
             with stepper.timer.phase("output: history"):
-                self.writer.write(record.row())
+                self.writer.write(_times_as_written(record))
 
     def finish(self, stepper: "PhaseFieldStepper") -> None:
         self.close()
@@ -215,6 +234,8 @@ class ResultsH5(Writer):
         with folder.manifest.writing("results.h5", "results.xdmf"):
             self.writer = (ResultsWriter.resume(self.path, self.scene, stepper.k) if folder.restart
                            else ResultsWriter(self.path, self.scene, overwrite=folder.overwrite))
+        self.writer.manifest = folder.manifest  # lists the per-mesh results_mesh_NNN.xdmf
+        self.writer.write_xdmf()
         self.writer.set_attributes(folder.info)
         if not folder.restart:
             self.writer.append(record)
@@ -292,7 +313,7 @@ class VTKSnapshots(Writer):
 
 
 class Checkpoints(Writer):
-    """``checkpoint.h5`` every ``output.checkpoint_every`` steps
+    """``checkpoint.h5`` every ``output.checkpoint_every`` steps and at the end
     (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically).
 
     In an MPI job every rank has one (the fields are gathered to rank 0, which writes the
@@ -305,8 +326,16 @@ class Checkpoints(Writer):
         self.every = scene.output.checkpoint_every
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        if not (self.every and record.step % self.every == 0):
-            return
+        if self.every and record.step % self.every == 0:
+            self._save(stepper)
+
+    def finish(self, stepper: "PhaseFieldStepper") -> None:
+        """One more at the end (unless the last step wrote one), so that a finished run can
+        be extended: ``ngfrac run --restart DIR --set time.t_end=T``."""
+        if self.every and stepper.k % self.every != 0:
+            self._save(stepper)
+
+    def _save(self, stepper: "PhaseFieldStepper") -> None:
         with stepper.timer.phase("output: checkpoint"):
             state = stepper.comm.gather_state(stepper)  # stepper.state(); under MPI collective, on rank 0
             if self.folder is not None:
@@ -426,14 +455,15 @@ class OpeningCSV(Writer):
 
 def write_plots(out: Path, stepper: "PhaseFieldStepper") -> None:
     """history.png, crack.png (z with the tip path) and force_displacement.png (if any)."""
-    plot_history(out / "history.csv", out / "history.png")
+    units = stepper.scene.units
+    plot_history(out / "history.csv", out / "history.png", units)
     history = read_history(out / "history.csv")
     tips = np.column_stack([history[c] for c in ("tip_x", "tip_y", "tip_z") if c in history])
     z_vertices = stepper.z_node_values()[: stepper.mesh.nv]
     plot_phase_field(stepper.mesh, z_vertices, out / "crack.png",
                      title=f"{stepper.scene.name}: z at t = {stepper.t:.4g}",
                      path=tips[np.all(np.isfinite(tips), axis=1)])
-    plot_force_displacement(history, out / "force_displacement.png")
+    plot_force_displacement(history, out / "force_displacement.png", units)
 
 
 class Plots(Writer):

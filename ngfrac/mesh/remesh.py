@@ -37,7 +37,7 @@ from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from ..fem.elements import ElementGeometry, edge_numbers
-from ..geometry.domains import Domain, MeshingError
+from ..geometry.domains import Domain, MeshingError, domain_of
 from ..scene import Geometry
 
 log = logging.getLogger(__name__)

@@ -87,8 +87,9 @@ def locate(mesh: ngs.Mesh, points: np.ndarray) -> np.ndarray:
     if len(missing):
         vertices = np.array(mesh.ngmesh.Coordinates())[:, : mesh.dim]
         distance, nearest = cKDTree(vertices).query(points[missing])
-        log.warning("%d of %d points lie outside the old mesh (up to %.3g away); they take the "
-                    "value at the nearest old vertex", len(missing), len(points), distance.max())
+        log.warning("%d of %d points lie outside the old mesh; they take the value at the "
+                    "nearest old vertex (up to %.3g from it)", len(missing), len(points),
+                    distance.max())
         located[missing] = mesh(*vertices[nearest].T)
     return located
 

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from ..physics.crack_models import CrackModel
     from .communicator import MPICommunicator
 
-__all__ = ["DistributedMeshAdapter", "MeshChangeCost", "SerialCopy", "node_dofs"]
+__all__ = ["DistributedMeshAdapter", "MeshChangeCost", "RootCopy", "node_dofs"]
 
 log = logging.getLogger(__name__)
 
@@ -152,7 +152,7 @@ class _NodeLayout:
 
 
 @dataclass(eq=False)
-class _RootCopy:
+class _RootDofMatch:
     """On rank 0: serial fields on the undistributed mesh and, per rank, the serial dof of
     each of its local dofs (per field)."""
 
@@ -160,7 +160,7 @@ class _RootCopy:
     index: list[dict[str, np.ndarray]]
 
     @classmethod
-    def match(cls, fields: MeshFields, layouts: list[_NodeLayout]) -> "_RootCopy":
+    def match(cls, fields: MeshFields, layouts: list[_NodeLayout]) -> "_RootDofMatch":
         from scipy.spatial import cKDTree
 
         mine = _NodeLayout.of(fields)
@@ -208,11 +208,11 @@ SPACE_OF = {"u": "u", "u_prev": "u", "z": "z"}
 """The field whose dof matching a field uses (u_prev lives in u's space)."""
 
 
-class SerialCopy:
+class RootCopy:
     """On rank 0 a serial copy of a distributed run's fields, dof for dof (made on every
     rank; the other ranks take part in the gathers and scatters).
 
-    The copy is matched to the current distributed mesh once (:class:`_RootCopy`, collective):
+    The copy is matched to the current distributed mesh once (:class:`_RootDofMatch`, collective):
     on the mesh rank 0 gave :meth:`distribute`, or else on a copy of the communicator's
     serial mesh (the scene's first mesh). Mesh changes (:class:`DistributedMeshAdapter`) and
     checkpoints (:mod:`ngfrac.parallel.checkpoints`) share it, so a checkpoint after a mesh
@@ -232,7 +232,7 @@ class SerialCopy:
         self.fields: MeshFields | None = None
         """This rank's fields of the last gather or scatter."""
         self._mesh: ngs.Mesh | None = None
-        self._root: _RootCopy | None = None
+        self._root: _RootDofMatch | None = None
         self._next_serial: MeshFields | ngs.Mesh | None = None
 
     @property
@@ -263,7 +263,7 @@ class SerialCopy:
                 serial = ngs.Mesh(self.comm.serial_ngmesh.Copy())
             if isinstance(serial, ngs.Mesh):
                 serial = self.serial_fields(serial)
-            self._root = _RootCopy.match(serial, layouts)
+            self._root = _RootDofMatch.match(serial, layouts)
         self._next_serial = None
         self._mesh, self.fields = fields.mesh, fields
 
@@ -310,7 +310,7 @@ class SerialCopy:
 class DistributedMeshAdapter(MeshAdapter):
     """The :class:`~ngfrac.mesh.adapter.MeshAdapter` of an MPI run (made on every rank).
 
-    Rank 0 holds a serial copy of the current fields (:class:`SerialCopy`, the
+    Rank 0 holds a serial copy of the current fields (:class:`RootCopy`, the
     communicator's) and runs the serial adapter's code on it; the other ranks take part in
     the gathers, the distribution of each new mesh and the scatters, and receive the
     adapter's state after every change (so :attr:`adaptations`, :attr:`eta_total` and the tip
@@ -327,7 +327,7 @@ class DistributedMeshAdapter(MeshAdapter):
                  crack_model: "CrackModel | None" = None) -> None:
         super().__init__(scene, crack_model)
         self.comm = comm
-        self.copy = comm.serial_copy(scene)
+        self.copy = comm.root_copy(scene)
         """Rank 0's serial copy of the fields (shared with the checkpoints)."""
         self.costs: list[MeshChangeCost] = []
         """The seconds of each distributed mesh change (rank 0's clock)."""

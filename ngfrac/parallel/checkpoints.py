@@ -1,7 +1,7 @@
 """Checkpoints of an MPI run: the serial checkpoint, written and read on rank 0.
 
 A distributed run's fields are on its ranks; rank 0 holds the undistributed mesh and a
-serial copy of the fields matched dof by dof (:class:`~ngfrac.parallel.adaptivity.SerialCopy`,
+serial copy of the fields matched dof by dof (:class:`~ngfrac.parallel.adaptivity.RootCopy`,
 the gather of a mesh change). :func:`gather_state` gathers u, u_prev and z into that copy and
 gives rank 0 the serial :class:`~ngfrac.solve.state.StepperState`, which
 :func:`~ngfrac.io.checkpoint.save_state` writes as a serial run's ``checkpoint.h5`` (same
@@ -27,11 +27,11 @@ if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper
     from .communicator import MPICommunicator
 
-__all__ = ["SerialView", "gather_state", "gather_view", "load_on_root", "resume_distributed"]
+__all__ = ["RootView", "gather_state", "gather_view", "load_on_root", "resume_distributed"]
 
 
 @dataclass(frozen=True, eq=False)
-class SerialView:
+class RootView:
     """What the serial writers of results.h5 and crack_path.csv read of a stepper, on rank
     0's serial mesh (:func:`gather_view`)."""
 
@@ -43,13 +43,13 @@ class SerialView:
     t: float
 
 
-def gather_view(stepper: "PhaseFieldStepper") -> SerialView | None:
+def gather_view(stepper: "PhaseFieldStepper") -> RootView | None:
     """u and z of the stepper gathered to rank 0's serial mesh (None on the other ranks).
     Collective."""
-    serial = stepper.comm.serial_copy(stepper.scene).gather(stepper.fields, ("u", "z"))
+    serial = stepper.comm.root_copy(stepper.scene).gather(stepper.fields, ("u", "z"))
     if serial is None:
         return None
-    return SerialView(stepper.scene, serial.mesh, serial.u, serial.z, stepper.k, stepper.t)
+    return RootView(stepper.scene, serial.mesh, serial.u, serial.z, stepper.k, stepper.t)
 
 
 def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:
@@ -61,7 +61,7 @@ def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:
     comm = stepper.comm
     if not comm.distributed:
         return stepper.state()
-    serial = comm.serial_copy(stepper.scene).gather(stepper.fields, STATE_FIELDS)
+    serial = comm.root_copy(stepper.scene).gather(stepper.fields, STATE_FIELDS)
     state = stepper.state()  # counters, crack tracking, adapter: the same on every rank
     if not comm.is_root:
         return None
@@ -99,7 +99,7 @@ def resume_distributed(checkpoint: CheckpointState | None, scene: "Scene",
     from ..solve.stepper import PhaseFieldStepper
 
     serial = checkpoint.stepper_state() if comm.is_root else None  # the serial mesh rebuilt
-    copy = comm.serial_copy(scene)
+    copy = comm.root_copy(scene)
     mesh = copy.distribute(serial.mesh if comm.is_root else None)
     local = copy.serial_fields(mesh)  # this rank's zero fields on the distributed mesh
     copy.attach(local)

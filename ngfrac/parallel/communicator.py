@@ -35,14 +35,15 @@ if TYPE_CHECKING:
     from ..physics.crack_models import CrackModel
     from ..solve.state import StepperState
     from ..solve.stepper import PhaseFieldStepper
-    from .checkpoints import SerialView
+    from .checkpoints import RootView
     from ..post.crackset import CrackSet
     from ..scene import Scene
     from ..solve.crack_tracking import CrackTracker
     from ..mesh.fields import MeshFields
 
-__all__ = ["SERIAL", "Communicator", "MPICommunicator", "ParallelError", "Serial",
-           "launched_rank", "launched_size", "world", "sum_over_ranks"]
+__all__ = ["MPICommunicator", "launched_rank", "launched_size", "world"]
+# SERIAL, Communicator, ParallelError and Serial are ngfrac.solve.communicator's (imported here
+# for the callers that name them from ngfrac.parallel)
 
 log = logging.getLogger(__name__)
 
@@ -112,7 +113,7 @@ class MPICommunicator:
                                "holds no elements; run mpirun -np 3 (or more), or run serially")
         self._serial_ngmesh: Any = None
         self._nv = 0
-        self._mirror: _RootMirror | None = None
+        self._mirror: _RootNodes | None = None
         self._copy: Any = None
         self._warned_p1 = False
 
@@ -161,14 +162,14 @@ class MPICommunicator:
         elsewhere)."""
         return self._serial_ngmesh
 
-    def serial_copy(self, scene: "Scene") -> Any:
+    def root_copy(self, scene: "Scene") -> Any:
         """Rank 0's serial copy of the run's fields
-        (:class:`~ngfrac.parallel.adaptivity.SerialCopy`), one per communicator and scene:
+        (:class:`~ngfrac.parallel.adaptivity.RootCopy`), one per communicator and scene:
         mesh changes and checkpoints share its dof matching."""
-        from .adaptivity import SerialCopy
+        from .adaptivity import RootCopy
 
         if self._copy is None or self._copy.scene is not scene:
-            self._copy = SerialCopy(scene, self)
+            self._copy = RootCopy(scene, self)
         return self._copy
 
     def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter":
@@ -192,7 +193,7 @@ class MPICommunicator:
 
         return gather_state(stepper)
 
-    def gather_view(self, stepper: "PhaseFieldStepper") -> "SerialView | None":
+    def gather_view(self, stepper: "PhaseFieldStepper") -> "RootView | None":
         """u and z gathered to rank 0's serial mesh, None on the other ranks. Collective."""
         from .checkpoints import gather_view
 
@@ -201,6 +202,14 @@ class MPICommunicator:
     def broadcast(self, value: Any) -> Any:
         """Rank 0's ``value`` on every rank. Collective."""
         return self.comm.bcast(value, root=0)
+
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any:
+        """The z-system of a distributed mesh: ``integrand`` as one form with this
+        communicator's preconditioner, solved by CG
+        (:class:`~ngfrac.parallel.z_system.DistributedSystem`)."""
+        from .z_system import DistributedSystem
+
+        return DistributedSystem(fes, integrand, self.z_preconditioner)
 
     def barrier(self) -> None:
         """Wait for every rank."""
@@ -215,7 +224,7 @@ class MPICommunicator:
         return self._nv, fields.fes_u.ndofglobal + fields.fes_z.ndofglobal
 
     # -- the crack, on rank 0 -------------------------------------------------------------------
-    def _gathered(self, fields: "MeshFields") -> "_RootMirror | None":
+    def _gathered(self, fields: "MeshFields") -> "_RootNodes | None":
         """z at the nodes of every rank, put on rank 0's whole mesh (None elsewhere)."""
         new_mesh = self._mirror is None or self._mirror.fields is not fields
         values = fields.z_values()
@@ -223,10 +232,10 @@ class MPICommunicator:
         gathered = self.comm.gather(payload, root=0)
         if not self.is_root:
             if new_mesh:
-                self._mirror = _RootMirror.remote(fields)
+                self._mirror = _RootNodes.remote(fields)
             return None
         if new_mesh:
-            self._mirror = _RootMirror(self._serial_ngmesh, fields, [p for p, _ in gathered])
+            self._mirror = _RootNodes(self._serial_ngmesh, fields, [p for p, _ in gathered])
             gathered = [v for _, v in gathered]
         self._mirror.set(gathered)
         return self._mirror
@@ -268,7 +277,7 @@ class MPICommunicator:
             os._exit(code)  # Abort may return before the launcher ends this process
 
 
-class _RootMirror:
+class _RootNodes:
     """On rank 0: the undistributed mesh with z's Lagrange nodes, and z gathered onto them.
 
     The crack tracker works on it as on serial fields (``mesh``, ``nodes``, ``z_values()``).
@@ -302,7 +311,7 @@ class _RootMirror:
         self._values = np.zeros(self.nodes.n_nodes)
 
     @classmethod
-    def remote(cls, fields: "MeshFields") -> "_RootMirror":
+    def remote(cls, fields: "MeshFields") -> "_RootNodes":
         """On the other ranks: only which fields were sent."""
         mirror = cls.__new__(cls)
         mirror.fields = fields

@@ -72,9 +72,10 @@ class CrackModel:
     c_w = math.nan
     z_update = "projection"
     quadratic_degradation = True
-    """g(z) = (1 - z)^2 + eta: the z-step's drive is exactly ``W (1 - zt)`` (the paper's), and
-    with w at most quadratic in z every form and energy is a polynomial of the degree
-    :func:`ngfrac.fem.quadrature.quadrature_order` integrates exactly on affine elements."""
+    """Whether ``g(z) = (1 - z)^2 + eta``. Then the z-step's drive is exactly ``W (1 - zt)``
+    (the paper's), and with w at most quadratic in z every form and energy is a polynomial of
+    the degree :func:`ngfrac.fem.quadrature.quadrature_order` integrates exactly on affine
+    elements."""
 
     def resolve_z_update(self, requested: str) -> str:
         """The z-update a run uses for ``discretization.z_update = requested`` (``"auto"``:

@@ -23,7 +23,7 @@ from typing import Any, Protocol, Sequence
 import ngsolve as ngs
 
 
-class Load(Protocol):
+class LoadSpec(Protocol):
     """What a model reads of a load (a scene's ``[[loads]]`` entry, :class:`ngfrac.scene.Load`):
     ``value`` is an expression (``to_coefficient(t)``) or, for a vector, a tuple of them
     whose ``free`` flags the components left free."""
@@ -35,7 +35,7 @@ class Load(Protocol):
     free: tuple[bool, ...]
 
 
-class Material(Protocol):
+class MaterialSpec(Protocol):
     """What a model reads of the material: its body force (an expression, or a tuple of them)."""
 
     body_force: Any
@@ -48,13 +48,13 @@ class ElasticModel(Protocol):
     n_components: int
     component_names: tuple[str, ...]
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace: ...
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[LoadSpec]) -> ngs.FESpace: ...
     def stress_strain(self, u: Any, v: Any) -> Any: ...
     def energy_density(self, u: Any) -> Any: ...
-    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any: ...
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter) -> Any: ...
     def set_boundary(self, gf: ngs.GridFunction, cf: Any) -> None: ...
-    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None: ...
-    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
+    def body_force(self, material: MaterialSpec, t: ngs.Parameter) -> Any | None: ...
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter,
                        v: Any) -> Any | None: ...
 
 
@@ -63,12 +63,12 @@ def _is_zero(expression: Any) -> bool:
     return bool(getattr(expression, "is_constant", False)) and expression.value() == 0
 
 
-def dirichlet_loads(loads: Sequence[Load]) -> Sequence[Load]:
+def dirichlet_loads(loads: Sequence[LoadSpec]) -> Sequence[LoadSpec]:
     """The loads that prescribe u (``kind = "displacement"``)."""
     return tuple(load for load in loads if load.is_dirichlet)
 
 
-def traction_of(load: Load, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
+def traction_of(load: LoadSpec, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
     """The traction sigma n a Neumann load prescribes: its value, or -p n for a pressure."""
     if load.kind == "pressure":
         return -load.value.to_coefficient(t) * ngs.specialcf.normal(mesh.dim)
@@ -77,7 +77,7 @@ def traction_of(load: Load, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
     return load.value.to_coefficient(t)
 
 
-def boundary_work(mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter, v: Any) -> Any | None:
+def boundary_work(mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter, v: Any) -> Any | None:
     """``sum over Neumann loads of int_Gamma traction . v ds``, or None without any."""
     def dot(traction: Any) -> Any:
         return traction * v if v.dim == 1 else ngs.InnerProduct(traction, v)
@@ -109,7 +109,7 @@ class AntiPlane:
         """The model of a scene's material (its shear modulus)."""
         return cls(material.shear_modulus)
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace:
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[LoadSpec]) -> ngs.FESpace:
         """The displacement space, Dirichlet on every loaded boundary."""
         return ngs.H1(mesh, order=order,
                       dirichlet="|".join(load.boundary for load in dirichlet_loads(loads)))
@@ -126,7 +126,7 @@ class AntiPlane:
         """The shear stress vector (sigma_xz, sigma_yz) = mu grad u of the sound material."""
         return self.mu * ngs.grad(u)
 
-    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any:
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter) -> Any:
         """One CoefficientFunction with each load's expression on its boundary."""
         return mesh.BoundaryCF({load.boundary: load.value.to_coefficient(t)
                                 for load in dirichlet_loads(loads)}, default=0)
@@ -135,12 +135,12 @@ class AntiPlane:
         """Interpolate ``cf`` into the Dirichlet dofs of ``gf`` (its other dofs are unspecified)."""
         gf.Set(cf, ngs.BND)
 
-    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
+    def body_force(self, material: MaterialSpec, t: ngs.Parameter) -> Any | None:
         """The out-of-plane force f, or None when it is zero."""
         force = material.body_force
         return None if _is_zero(force) else force.to_coefficient(t)
 
-    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter,
                        v: Any) -> Any | None:
         """``int_Gamma tau v ds`` of the traction loads (tau = sigma_zn), or None."""
         return boundary_work(mesh, loads, t, v)
@@ -193,7 +193,7 @@ class Elasticity:
             return self.poisson_ratio * (stress[0, 0] + stress[1, 1])
         return 0.0
 
-    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[Load]) -> ngs.FESpace:
+    def space(self, mesh: ngs.Mesh, order: int, loads: Sequence[LoadSpec]) -> ngs.FESpace:
         """VectorH1, Dirichlet in component i on the boundaries whose load gives that component."""
         flags = {f"dirichlet{c}": "|".join(load.boundary for load in dirichlet_loads(loads)
                                            if not load.free[i])
@@ -218,7 +218,7 @@ class Elasticity:
         e = self.strain(u)
         return 2 * self.mu * e + self.lam * ngs.Trace(e) * ngs.Id(self.n_components)
 
-    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter) -> Any:
+    def boundary_values(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter) -> Any:
         """One vector CoefficientFunction with each load's components on its boundary
         (0 in free components, which :meth:`set_boundary` never reads)."""
         def vector(value: Any) -> Any:
@@ -237,7 +237,7 @@ class Elasticity:
         for i, component in enumerate(gf.components):
             component.Set(cf[i], ngs.BND)
 
-    def body_force(self, material: Material, t: ngs.Parameter) -> Any | None:
+    def body_force(self, material: MaterialSpec, t: ngs.Parameter) -> Any | None:
         """f = [fx, fy] (3D: [fx, fy, fz]) as a vector CoefficientFunction, or None when zero."""
         force = material.body_force
         if not isinstance(force, tuple):
@@ -246,7 +246,7 @@ class Elasticity:
             return None
         return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in force))
 
-    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[Load], t: ngs.Parameter,
+    def boundary_force(self, mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter,
                        v: Any) -> Any | None:
         """``int_Gamma t.v ds`` of the traction and pressure loads (t = -p n), or None."""
         return boundary_work(mesh, loads, t, v)
@@ -256,6 +256,7 @@ class PlaneStrain(Elasticity):
     """Plane strain: the in-plane part of 3D elasticity with e_zz = 0 (3D Lame constants)."""
 
     name = "plane_strain"
+    n_components = 2
 
     def __init__(self, lam: float, mu: float) -> None:
         super().__init__(lam, mu, dim=2)
@@ -271,6 +272,7 @@ class PlaneStress(Elasticity):
     """
 
     name = "plane_stress"
+    n_components = 2
     bulk_dim = 2
 
     def __init__(self, lam: float, mu: float) -> None:
@@ -291,6 +293,7 @@ class Elasticity3D(Elasticity):
     """
 
     name = "elasticity_3d"
+    n_components = 3
 
     def __init__(self, lam: float, mu: float) -> None:
         super().__init__(lam, mu, dim=3)
@@ -299,4 +302,5 @@ class Elasticity3D(Elasticity):
 ELASTIC_MODELS: dict[str, type[AntiPlane] | type[Elasticity]] = {
     "mode3": AntiPlane, "plane_strain": PlaneStrain, "plane_stress": PlaneStress,
     "elasticity_3d": Elasticity3D}
-"""The values of ``model.kind``: each class builds itself from a scene's material (``of``)."""
+"""The values of ``model.kind``: each class builds itself from a scene's material (``of``) and
+says how many components u has (3: a 3D model, on a 3D domain)."""

@@ -24,6 +24,7 @@ from .checks import check_times, crack_problems, nonfinite_value
 from ..physics.crack_models import CRACK_MODELS, PFCZM, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
 from .expressions import Expression, ExpressionError
+from .units import SCENE_UNITS, unit_system
 
 if TYPE_CHECKING:
     from ..geometry.domains import Domain
@@ -31,7 +32,7 @@ if TYPE_CHECKING:
 MODELS = tuple(ELASTIC_MODELS)
 """Model names a scene may choose (``model.kind``)."""
 
-MODELS_3D = ("elasticity_3d",)
+MODELS_3D = tuple(kind for kind, model in ELASTIC_MODELS.items() if model.n_components == 3)
 """Models of a 3D domain (``geometry.kind = "box"``); the others are 2D."""
 
 
@@ -146,7 +147,7 @@ class Model(_Section):
     @property
     def n_components(self) -> int:
         """Components of u: 1 for mode III, 2 for the plane models, 3 in 3D."""
-        return 1 if self.kind == "mode3" else 3 if self.kind in MODELS_3D else 2
+        return ELASTIC_MODELS[self.kind].n_components
 
     def check(self, material: "Material", loads: tuple["Load", ...]) -> None:
         """What spans sections: loads, body force and moduli must fit the model.
@@ -938,9 +939,16 @@ class Scene:
     discretization: Discretization = field(default_factory=Discretization)
     output: Output = field(default_factory=Output)
     adaptivity: Adaptivity = field(default_factory=Adaptivity)
+    units: str = SCENE_UNITS
+    """The unit system of the scene's numbers (:data:`ngfrac.scene.units.UNIT_SYSTEMS`): labels
+    and units attributes only, the computation is the same."""
 
     def __post_init__(self) -> None:
         self._coerce_sections()
+        try:
+            unit_system(self.units)
+        except ValueError as err:
+            raise SceneError(str(err)) from None
         names = self.geometry.boundary_names
         self._check_dimension()
         if not any(load.is_dirichlet for load in self.loads):
@@ -1139,11 +1147,12 @@ class Scene:
         """Validate a nested mapping (as read from TOML) into a Scene."""
         if not isinstance(data, Mapping):
             raise SceneError("a scene must be a table of sections")
-        allowed = ["name", *SECTIONS, *LISTS]
+        allowed = ["name", "units", *SECTIONS, *LISTS]
         for key in data:
             if key not in allowed:
                 raise SceneError(_unknown_key_message("", key, allowed))
-        kwargs: dict[str, Any] = {"name": str(data.get("name", name))}
+        kwargs: dict[str, Any] = {"name": str(data.get("name", name)),
+                                  "units": data.get("units", SCENE_UNITS)}
         for section, section_cls in SECTIONS.items():
             value = data.get(section, {})
             if section_cls in (Geometry, PhaseField, TimeSettings) and section not in data:
@@ -1174,7 +1183,7 @@ class Scene:
             return {k: plain(v) for k, v in values.items()
                     if not (isinstance(v, float) and math.isnan(v))}
 
-        out: dict[str, Any] = {"name": self.name}
+        out: dict[str, Any] = {"name": self.name, "units": self.units}
         for name in SECTIONS:
             out[name] = section(getattr(self, name))
         out["geometry"] = self.geometry.to_dict()

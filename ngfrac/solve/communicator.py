@@ -33,8 +33,6 @@ class Communicator(Protocol):
     rank: int
     is_root: bool
     distributed: bool
-    z_preconditioner: str
-    """Of the z-CG on distributed matrices (unused on one process)."""
 
     def check(self, scene: "Scene") -> None: ...
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
@@ -48,6 +46,7 @@ class Communicator(Protocol):
     def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState | None": ...
     def gather_view(self, stepper: "PhaseFieldStepper") -> Any: ...
     def broadcast(self, value: Any) -> Any: ...
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any: ...
     def barrier(self) -> None: ...
 
 
@@ -58,7 +57,6 @@ class Serial:
     rank = 0
     is_root = True
     distributed = False
-    z_preconditioner = "local"
 
     def check(self, scene: "Scene") -> None:
         """Nothing to refuse: every scene runs on one process."""
@@ -108,6 +106,11 @@ class Serial:
     def broadcast(self, value: Any) -> Any:
         """``value`` (rank 0's, on every rank)."""
         return value
+
+    def z_system(self, fes: ngs.FESpace, integrand: Any) -> None:
+        """None: on one process the z-problem assembles K, M and the drive apart and
+        factorizes (:mod:`ngfrac.solve.z_problem`)."""
+        return None
 
     def barrier(self) -> None:
         """Nothing to wait for."""

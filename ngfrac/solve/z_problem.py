@@ -108,7 +108,8 @@ class PhaseFieldProblem:
         self._ones = None if context.comm.distributed else _constant_one(fields.fes_z, fields.z.vec)
         self._inverse: Any = None
         self._obstacle = NodalObstacle(fields.nodes) if update == "obstacle" else None
-        self._distributed: DistributedSystem | None = None
+        self._distributed: Any = None
+        """The communicator's z-system of a distributed mesh (:meth:`Communicator.z_system`)."""
         if context.comm.distributed:  # no AsVector, smoother or direct solve of its matrices
             rhs = (pf.alpha2 * inv_dt * fields.z + explicit) * w
             explicit_concave = crack_model.concave(fields.z, w, gamma, eps)
@@ -117,10 +118,9 @@ class PhaseFieldProblem:
             for part in (source, pressure):
                 rhs = rhs if part is None else rhs + part
             self._distributed_rhs = ngs.LinearForm(rhs * dx)
-            self._distributed = DistributedSystem(
+            self._distributed = context.comm.z_system(
                 fields.fes_z, (crack_model.stiffness(zt, w, gamma, eps)
-                               + pf.alpha2 * inv_dt * zt * w + implicit * zt * w) * dx,
-                context.comm.z_preconditioner)
+                               + pf.alpha2 * inv_dt * zt * w + implicit * zt * w) * dx)
         self.shortened = 0
         """Projections the descent shortened (``discretization.z_update = "descent"``)."""
 
@@ -298,40 +298,3 @@ def _surface_value(stiffness: Any, source: ngs.LinearForm | None, z: ngs.BaseVec
     if source is not None:
         terms = terms - source.vec.FV().NumPy() * values
     return math.fsum(terms)
-
-
-class DistributedSystem:
-    """The z-system of a distributed mesh: K + (alpha2/dt) M + D(W) as one form, assembled
-    every step with its parallel preconditioner registered, solved by CG from z_old.
-
-    Distributed matrices have no ``AsVector`` (the serial path adds K and M to D's values),
-    no ``CreateSmoother`` and no direct solve in the pip wheel.
-
-    Parameters
-    ----------
-    fes : ngsolve.FESpace
-        The space of z.
-    integrand : ngsolve.comp.SumOfIntegrals
-        The whole bilinear form.
-    preconditioner : str
-        ``"local"`` (Jacobi) or ``"bddc"``.
-    """
-
-    def __init__(self, fes: ngs.FESpace, integrand: Any, preconditioner: str) -> None:
-        self.form = ngs.BilinearForm(fes, symmetric=True)
-        self.form += integrand
-        self.kind = preconditioner
-        self.preconditioner = ngs.Preconditioner(self.form, preconditioner)
-
-    def solve(self, rhs: ngs.BaseVector, z_old: ngs.BaseVector, out: ngs.BaseVector,
-              step: int | str) -> int:
-        """Assemble, then CG (relative tolerance 1e-10) from z_old into ``out``; returns the
-        iterations."""
-        self.form.Assemble()
-        out.data = z_old
-        cg = CGSolver(self.form.mat, self.preconditioner.mat, tol=1e-10, maxiter=CG_MAXITER)
-        cg.Solve(rhs=rhs, sol=out, initialize=False)
-        if cg.iterations >= CG_MAXITER:
-            raise SolverError(f"the z-solve (CG, preconditioner {self.kind!r}) did "
-                              f"not converge at step {step}; run serially")
-        return int(cg.iterations)

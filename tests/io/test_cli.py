@@ -72,13 +72,18 @@ def test_run_writes_outputs_and_refuses_to_overwrite(quick_run):
 
 
 def test_restart_continues_a_killed_run_exactly(tmp_path):
-    """Run 6 steps with a checkpoint at 4; continue from it to 8 steps, compare with 8 straight."""
+    """Run 6 steps whose last checkpoint is at 4 (as a run killed after step 6: a finished
+    run writes one at its end, so the step-4 checkpoint of a 4-step run of the scene is put in
+    its place); continue from it to 8 steps, compare with 8 straight."""
     common = ["--set", "phase_field.epsilon=0.08", "--set", "geometry.mesh_size=0.04",
               "--set", "adaptivity.enabled=false", "--set", "output.checkpoint_every=4",
               "--no-progress", "--no-plots"]
     straight, broken = tmp_path / "straight", tmp_path / "broken"
     assert ngfrac("run", SLIT, "--out", str(straight), "--set", "time.t_end=0.004", *common).returncode == 0
     assert ngfrac("run", SLIT, "--out", str(broken), "--set", "time.t_end=0.003", *common).returncode == 0
+    early = tmp_path / "early"
+    assert ngfrac("run", SLIT, "--out", str(early), "--set", "time.t_end=0.002", *common).returncode == 0
+    shutil.copy(early / "checkpoint.h5", broken / "checkpoint.h5")  # rows 5 and 6 come after it
     again = ngfrac("run", "--restart", str(broken), "--set", "time.t_end=0.004", *common[-2:])
     assert again.returncode == 0, again.stderr
     a = (straight / "history.csv").read_text().splitlines()

@@ -8,6 +8,7 @@ import numpy as np
 import ngsolve as ngs
 import pytest
 
+from ngfrac.physics.crack_models import AT2
 from ngfrac.physics.cracks import distance_to_polylines
 from ngfrac.geometry.domains import CRACK_BOUNDARY, build_mesh, netgen_geometry
 from ngfrac.fem.elements import ElementGeometry
@@ -123,7 +124,7 @@ def test_crack_length_survives_a_transfer_to_a_regenerated_mesh():
     new = crack_mesh(old, h_band=0.45 * EPS, h_core=0.09 * EPS, hmax=0.08, width=5 * EPS)
     z = profile_field(old, 2)
     z_new, _ = transfer_phase_field(z, z, ngs.H1(new, order=2))
-    before, after = crack_length(z, EPS), crack_length(z_new, EPS)
+    before, after = crack_length(z, EPS, AT2()), crack_length(z_new, EPS, AT2())
     assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.02)  # line + half disc at the tip
     assert abs(after - before) < 0.005 * before, (before, after)
 
@@ -142,6 +143,6 @@ def test_crack_length_survives_on_crack_aligned_meshes_at_eps_over_2():
     assert CRACK_BOUNDARY in new.GetBoundaries() and "bottom" in new.GetBoundaries()
     z = profile_field(old, 2)
     z_new, _ = transfer_phase_field(z, z, ngs.H1(new, order=2))
-    before, after = crack_length(z, EPS), crack_length(z_new, EPS)
+    before, after = crack_length(z, EPS, AT2()), crack_length(z_new, EPS, AT2())
     assert before == pytest.approx(0.5 + np.pi * EPS / 4, rel=0.005)
     assert abs(after - before) < 0.001 * before, (before, after)
