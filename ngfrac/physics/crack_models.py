@@ -324,7 +324,11 @@ class PFCZM(CrackModel):
     def rankine_drive(self, stress: Any, n_components: int) -> ngs.CoefficientFunction:
         """Wu's Rankine drive ``W = <sigma_1>^2 / E`` (twice his ``Ybar``): sigma_1 the
         largest principal stress of the undegraded stress ``stress`` (a CF: the model's
-        ``stress(u)``; mode III: the shear stress vector, sigma_1 = its length)."""
+        ``stress(u)``; mode III: the shear stress vector, sigma_1 = its length).
+
+        Wu takes the history maximum of Ybar; this drive keeps none: under monotone loading W
+        does not fall where z grows, and the non-repair bound z >= z_old already keeps what
+        z reached (a history would only change when z grows again after unloading)."""
         sigma_1 = largest_principal_stress(stress, n_components)
         return (_nonnegative(sigma_1) ** 2 / self.young).Compile()
 
