@@ -2,8 +2,9 @@
 
 Importing ngfrac changes nothing. :func:`ngfrac.run_scene` and ``ngfrac run`` call
 :func:`set_threads` when a run starts; a script that drives a
-:class:`~ngfrac.solve.stepper.PhaseFieldStepper` itself calls it once, or NGSolve's
-``SetNumThreads``.
+:class:`~ngfrac.solve.stepper.PhaseFieldStepper` itself calls it once (NGSolve's own
+``SetNumThreads`` works before the first stepper; after it ngfrac keeps the count it read,
+:func:`ngfrac.fem.threads.configured_threads`).
 """
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ import logging
 import os
 
 import ngsolve as ngs
+
+from .fem.threads import note_threads
 
 __all__ = ["THREADS_VARIABLE", "set_threads"]
 
@@ -55,4 +58,5 @@ def set_threads(n: int | None = None) -> int | None:
     elif isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"set_threads: n = {n!r} is not a positive integer (e.g. n=1)")
     ngs.SetNumThreads(n)
+    note_threads(n)
     return n

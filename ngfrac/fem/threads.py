@@ -16,20 +16,54 @@ one thread (:func:`single_thread`), and sums integrals element by element (:func
 of a scene then gives the same bits every time with a given thread count.
 ``discretization.threaded_solves = true`` runs a whole step inside the TaskManager instead:
 faster on many cores, not reproducible bitwise.
+
+NGSolve's idle workers spin: with another busy process on the machine a threaded kernel can
+take hundreds of times its single-thread time (docs/benchmarks.md, "Threads on a busy
+machine"). So the assemblies of a step go through a :class:`ThreadChooser`: per kind of
+kernel it uses the threads or one thread, whichever took less wall time lately, and tries the
+other again after 8, 16, ..., 512 calls. Assembly gives the same bits with any thread count,
+so the choice changes timings only.
 """
 from __future__ import annotations
 
 import math
 import threading
+import time
 from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import ngsolve as ngs
 
 from .ranks import sum_over_ranks
 
-__all__ = ["ThreadPolicy", "integrate", "single_thread", "threaded"]
+__all__ = ["ThreadChooser", "ThreadPolicy", "configured_threads", "integrate", "note_threads",
+           "single_thread", "threaded"]
+
+_configured: int | None = None
+"""NGSolve's thread count as configured (:func:`configured_threads`)."""
+
+
+def configured_threads() -> int:
+    """NGSolve's configured thread count.
+
+    Outside a TaskManager ``GetNumThreads()`` says 1 whatever is configured, and entering one
+    starts its workers (costly on a busy machine): it is entered once per process to read the
+    count, and :func:`note_threads` (called by :func:`ngfrac.set_threads`) keeps it current.
+    A script that changes the count itself calls :func:`ngfrac.set_threads`, not
+    ``ngsolve.SetNumThreads``.
+    """
+    global _configured
+    if _configured is None:
+        with ngs.TaskManager():
+            _configured = int(ngs.GetNumThreads())
+    return _configured
+
+
+def note_threads(n: int) -> None:
+    """Record that NGSolve's thread count was set to ``n``."""
+    global _configured
+    _configured = int(n)
 
 
 @contextmanager
@@ -49,13 +83,110 @@ def single_thread() -> Iterator[None]:
 
     Sparse factorizations and solves inside it are bitwise reproducible.
     """
-    with ngs.TaskManager():  # outside one, GetNumThreads() says 1 whatever is configured
-        threads = ngs.GetNumThreads()
+    threads = configured_threads()
     ngs.SetNumThreads(1)
     try:
         yield
     finally:
         ngs.SetNumThreads(threads)
+
+
+@dataclass
+class _Timings:
+    """Recent wall times of one kind of kernel with threads and with one thread."""
+
+    threaded: float = math.nan
+    single: float = math.nan
+    calls: int = 0
+    interval: int = 8
+    next_trial: int = 0
+
+
+class ThreadChooser:
+    """Threads where they pay: per kind of kernel (a key), NGSolve's threads or one thread,
+    whichever took less wall time lately.
+
+    The first call of a key runs threaded and is not timed (a first assembly also builds the
+    matrix graph); the next two time each mode once; then the faster one runs, and the other
+    is tried again after ``interval`` calls, the interval doubling (8 to 512) while the choice
+    holds and starting again at 8 when it flips. A wall time is an exponential average (half
+    weight to the newest). With one configured thread nothing is entered.
+
+    Parameters
+    ----------
+    enter : callable, optional
+        The context of a threaded kernel (:func:`threaded`); replaceable for tests.
+    clock : callable, optional
+        Seconds (:func:`time.perf_counter`).
+    threads : callable, optional
+        The configured thread count (:func:`configured_threads`).
+    """
+
+    FIRST_INTERVAL = 8
+    MAX_INTERVAL = 512
+
+    def __init__(self, enter: Callable[[], AbstractContextManager] | None = None,
+                 clock: Callable[[], float] = time.perf_counter,
+                 threads: Callable[[], int] | None = None) -> None:
+        self.enter = threaded if enter is None else enter
+        self.clock = clock
+        self.threads = configured_threads if threads is None else threads
+        self.timings: dict[str, _Timings] = {}
+        self._lock = threading.Lock()
+
+    def _use_threads(self, t: _Timings) -> tuple[bool, bool]:
+        """(threaded, timed) for the next call."""
+        if t.calls == 1:
+            return True, False
+        if math.isnan(t.single):
+            return False, True
+        if math.isnan(t.threaded):
+            return True, True
+        best = t.threaded <= t.single
+        if t.calls >= t.next_trial:
+            return not best, True
+        return best, True
+
+    @contextmanager
+    def __call__(self, key: str) -> Iterator[None]:
+        """The context of one kernel of kind ``key``."""
+        if self.threads() <= 1:
+            yield
+            return
+        with self._lock:
+            t = self.timings.setdefault(key, _Timings())
+            t.calls += 1
+            use, timed = self._use_threads(t)
+            best_before = t.threaded <= t.single
+            trial = timed and t.calls >= t.next_trial and not (math.isnan(t.single)
+                                                              or math.isnan(t.threaded))
+        start = self.clock()
+        with self.enter() if use else nullcontext():
+            yield
+        elapsed = self.clock() - start
+        if not timed:
+            return
+        with self._lock:
+            old = t.threaded if use else t.single
+            new = elapsed if math.isnan(old) else 0.5 * (old + elapsed)
+            if use:
+                t.threaded = new
+            else:
+                t.single = new
+            if trial:
+                flipped = (t.threaded <= t.single) != best_before
+                t.interval = self.FIRST_INTERVAL if flipped else min(2 * t.interval,
+                                                                     self.MAX_INTERVAL)
+                t.next_trial = t.calls + t.interval
+            elif t.next_trial == 0 and not (math.isnan(t.single) or math.isnan(t.threaded)):
+                t.next_trial = t.calls + t.interval
+
+    def uses_threads(self, key: str) -> bool | None:
+        """Whether the kernel ``key`` runs threaded now (None before it was timed both ways)."""
+        t = self.timings.get(key)
+        if t is None or math.isnan(t.single) or math.isnan(t.threaded):
+            return None
+        return t.threaded <= t.single
 
 
 @dataclass(frozen=True)
@@ -73,6 +204,8 @@ class ThreadPolicy:
     """Run the u- and z-sub-steps at the same time in two Python threads
     (``discretization.concurrent_substeps``), inside :meth:`concurrently`."""
     _section: threading.Event = field(default_factory=threading.Event, compare=False, repr=False)
+    chooser: ThreadChooser = field(default_factory=ThreadChooser, compare=False, repr=False)
+    """Threads or one thread per kind of assembly (:class:`ThreadChooser`)."""
 
     @contextmanager
     def concurrently(self) -> Iterator[None]:
@@ -97,12 +230,20 @@ class ThreadPolicy:
             return nullcontext()
         return single_thread()
 
-    def assembly(self, preconditioner: object = None) -> AbstractContextManager:
-        """Threads for an assembly, unless it also sets up a registered preconditioner
-        (BDDC factorizes inside the assembly) or runs beside another (:meth:`concurrently`)."""
+    def assembly(self, preconditioner: object = None, kind: str = "assembly") -> AbstractContextManager:
+        """Threads for an assembly where they pay (:class:`ThreadChooser`, per ``kind``), unless
+        it also sets up a registered preconditioner (BDDC factorizes inside the assembly) or
+        runs beside another (:meth:`concurrently`). With ``threaded_solves`` the whole step is
+        threaded already."""
         if self._section.is_set():
             return nullcontext()
-        return threaded() if preconditioner is None else self.solves()
+        if preconditioner is not None:
+            return self.solves()
+        return threaded() if self.threaded_solves else self.chooser(kind)
+
+
+SHARED_CHOOSER = ThreadChooser()
+"""The chooser of kernels outside a stepper's policy (:func:`integrate`, transfers)."""
 
 
 def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,
@@ -138,7 +279,7 @@ def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.V
         kwargs["definedon"] = definedon
     components = [cf] if cf.dim == 1 else [cf[i] for i in range(cf.dim)]
     values = []
-    with threaded():
+    with SHARED_CHOOSER("integrate"):
         for component in components:
             per_element = ngs.Integrate(component, mesh, vb, **kwargs)
             values.append(math.fsum(per_element.NumPy()))

@@ -37,7 +37,7 @@ from scipy.spatial import cKDTree
 
 from ..physics.crack_models import CrackModel
 from ..fem.nodal import LagrangeNodes
-from ..fem.threads import integrate, threaded
+from ..fem.threads import SHARED_CHOOSER, integrate
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +63,7 @@ def transfer(gf_old: ngs.GridFunction, fes_new: ngs.FESpace,
     """
     gf_new = ngs.GridFunction(fes_new, gf_old.name)
     if method == "set":
-        with threaded():
+        with SHARED_CHOOSER("transfer"):
             gf_new.Set(gf_old)
     elif method == "nodes":
         nodes = LagrangeNodes(fes_new)

@@ -167,7 +167,7 @@ class DisplacementProblem:
                               "raise phase_field.residual_stiffness or lower time.dt")
 
     def _solve_linear(self, step: int | str) -> None:
-        with self.context.timer.phase("u: assemble"), self.context.threads.assembly(self.linear.preconditioner):
+        with self.context.timer.phase("u: assemble"), self.context.threads.assembly(self.linear.preconditioner, "u"):
             self.a_u.Assemble()
             if self.f_u is not None:
                 self.f_u.Assemble()

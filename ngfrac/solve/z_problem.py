@@ -135,7 +135,7 @@ class PhaseFieldProblem:
                 iterations = self._distributed.solve(self.rhs, self.fields.z.vec,
                                                      self.z_trial.vec, step)
             return iterations
-        with self.context.timer.phase("z: assemble"), self.context.threads.assembly():
+        with self.context.timer.phase("z: assemble"), self.context.threads.assembly(kind="z"):
             self._assemble_system()
         if self._obstacle is not None:
             with self.context.timer.phase("z: obstacle solve"), self.context.threads.solves():

@@ -1,7 +1,9 @@
 """NGFRAC_THREADS caps NGSolve's threads when a run starts (for several runs side by side);
-importing ngfrac changes nothing in the session."""
+importing ngfrac changes nothing in the session; the thread chooser keeps the faster of
+threads and one thread per kind of kernel."""
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -9,6 +11,7 @@ import sys
 import pytest
 
 import ngfrac
+from ngfrac.fem.threads import ThreadChooser
 
 THREADS = "with ngs.TaskManager():\n    print(ngs.GetNumThreads())\n"
 
@@ -48,3 +51,61 @@ def test_a_bad_value_is_named_and_ignored():
 def test_an_explicit_count_must_be_a_positive_integer(n):
     with pytest.raises(ValueError, match="not a positive integer"):
         ngfrac.set_threads(n)
+
+
+class FakeKernels:
+    """A clock and a threaded context for ThreadChooser: a kernel takes ``threaded`` or
+    ``single`` seconds of the fake clock, as the chooser's choice."""
+
+    def __init__(self, threaded: float, single: float) -> None:
+        self.now, self.cost = 0.0, {True: threaded, False: single}
+        self.inside, self.threaded_calls = False, 0
+
+    def clock(self) -> float:
+        return self.now
+
+    @contextlib.contextmanager
+    def enter(self):
+        self.inside = True
+        self.threaded_calls += 1
+        try:
+            yield
+        finally:
+            self.inside = False
+
+    def run(self, chooser: ThreadChooser, calls: int, key: str = "u") -> None:
+        for _ in range(calls):
+            with chooser(key):
+                self.now += self.cost[self.inside]
+
+
+@pytest.mark.parametrize("threaded, single, most", [(0.05, 0.0002, False), (0.010, 0.025, True)],
+                         ids=["busy machine", "quiet machine, large mesh"])
+def test_the_chooser_keeps_the_faster_mode_and_rarely_tries_the_other(threaded, single, most):
+    kernels = FakeKernels(threaded, single)
+    chooser = ThreadChooser(enter=kernels.enter, clock=kernels.clock, threads=lambda: 2)
+    kernels.run(chooser, 1000)
+    assert chooser.uses_threads("u") is most
+    others = kernels.threaded_calls if not most else 1000 - kernels.threaded_calls
+    # first call threaded, one timing each way, then trials after 8, 16, ..., 512 calls: 8
+    assert others <= 9, others
+
+
+def test_the_chooser_follows_a_machine_that_gets_busy():
+    kernels = FakeKernels(threaded=0.010, single=0.025)
+    chooser = ThreadChooser(enter=kernels.enter, clock=kernels.clock, threads=lambda: 2)
+    kernels.run(chooser, 300)
+    assert chooser.uses_threads("u") is True
+    kernels.cost[True] = 0.5  # a busy neighbour: the threaded kernel collapses
+    before = kernels.threaded_calls
+    kernels.run(chooser, 300)
+    assert chooser.uses_threads("u") is False
+    # the running mode's average rises above the other's at once: a call or two
+    assert kernels.threaded_calls - before <= 2
+
+
+def test_one_configured_thread_enters_nothing():
+    kernels = FakeKernels(threaded=0.01, single=0.02)
+    chooser = ThreadChooser(enter=kernels.enter, clock=kernels.clock, threads=lambda: 1)
+    kernels.run(chooser, 50)
+    assert kernels.threaded_calls == 0 and chooser.uses_threads("u") is None
