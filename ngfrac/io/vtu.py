@@ -3,8 +3,8 @@
 NGSolve's ``VTKOutput`` writes ASCII and every element on its own (refined ``subdivision``
 times), which shows P2 fields faithfully but is slow and large in 3D. This writer stores the
 mesh once per file: the vertices, the simplices, the continuous fields (H1 GridFunctions: u,
-z) at the vertices and every other field (stress, energy density, estimator, ...) as its
-average over each element. The files are VTK XML UnstructuredGrid with base64 binary arrays,
+z) at the vertices and every other field (stress, energy density, estimator, ...) at each
+element's centroid. The files are VTK XML UnstructuredGrid with base64 binary arrays,
 each compressed with zlib (``compressor="vtkZLibDataCompressor"``), which ParaView and meshio
 read.
 """
@@ -103,42 +103,53 @@ def write_vtu(path: str | Path, points: np.ndarray, cells: np.ndarray,
 
 def _is_continuous(cf: Any) -> bool:
     """A GridFunction of a continuous (H1 or VectorH1) space: its vertex values are exact."""
-    if not isinstance(cf, ngs.GridFunction):
-        return False
-    return type(cf.space).__name__ in ("H1", "VectorH1")
+    return isinstance(cf, ngs.GridFunction) and type(cf.space).__name__ in ("H1", "VectorH1")
+
+
+def _vertex_values(gf: ngs.GridFunction, nv: int) -> np.ndarray | None:
+    """The values of an H1 (VectorH1) GridFunction at the mesh's vertices from its vertex dofs
+    (the higher-order basis functions vanish at the vertices), or None where the vertex dofs
+    are not the first nv in vertex order."""
+    parts = gf.components if type(gf.space).__name__ == "VectorH1" else [gf]
+    columns = []
+    for part in parts:
+        fes = part.space
+        if fes.ndof < nv or tuple(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, nv - 1))) != (nv - 1,):
+            return None
+        columns.append(part.vec.FV().NumPy()[:nv].copy())
+    return columns[0] if len(columns) == 1 else np.column_stack(columns)
 
 
 def snapshot_arrays(mesh: ngs.Mesh, fields: Mapping[str, Any]
                     ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Points, cells, point data and cell data of named CoefficientFunctions on ``mesh``.
 
-    Continuous GridFunctions (H1, VectorH1: u, z) are evaluated at the vertices; every other
-    field is averaged over each element (element-wise integrals of degree 2 k + 2, k the
-    largest order of the GridFunctions, over the measures).
+    Continuous GridFunctions (H1, VectorH1: u, z) are given at the vertices (their vertex
+    dofs); every other field at each element's centroid, one evaluation of the field at all
+    centroids (the element average for fields linear on each element, such as the stress of
+    P2 u).
     """
     geometry = ElementGeometry.of(mesh)
     points, cells = geometry.coordinates, geometry.vertices
     point_data: dict[str, np.ndarray] = {}
     cell_data: dict[str, np.ndarray] = {}
-    at_vertices = None
-    order = 2 * _order_of(fields) + 2  # P2: degree 6, the energies' own rule
+    centroids = None
     for name, cf in fields.items():
         if _is_continuous(cf):
-            if at_vertices is None:
-                at_vertices = mesh(*(points[:, k] for k in range(mesh.dim)))
-            values = np.asarray(cf(at_vertices), dtype=np.float64)
+            values = _vertex_values(cf, len(points))
+            if values is not None:
+                point_data[name] = values
+                continue
+            at = mesh(*(points[:, k] for k in range(mesh.dim)))
+            values = np.asarray(cf(at), dtype=np.float64)
             point_data[name] = values.reshape(len(points), -1) if cf.dim > 1 else values.ravel()
             continue
+        if centroids is None:
+            element = ngs.TET if mesh.dim == 3 else ngs.TRIG
+            centre = (0.25, 0.25, 0.25) if mesh.dim == 3 else (1 / 3, 1 / 3)
+            rule = ngs.IntegrationRule([centre], [1.0])
+            centroids = mesh.MapToAllElements({element: rule}, ngs.VOL)
         cf = ngs.CoefficientFunction(cf)
-        components = [cf] if cf.dim == 1 else [cf[i] for i in range(cf.dim)]
-        columns = [ngs.Integrate(c, mesh, element_wise=True, order=order).NumPy() / geometry.measures
-                   for c in components]
-        cell_data[name] = columns[0] if cf.dim == 1 else np.column_stack(columns)
+        values = np.asarray(cf(centroids), dtype=np.float64)
+        cell_data[name] = values.reshape(len(cells), -1) if cf.dim > 1 else values.ravel()
     return points, cells, point_data, cell_data
-
-
-def _order_of(fields: Mapping[str, Any]) -> int:
-    """The largest polynomial order of the GridFunctions among ``fields`` (1 if none)."""
-    orders = [getattr(cf.space, "globalorder", 1) for cf in fields.values()
-              if isinstance(cf, ngs.GridFunction)]
-    return int(max(orders, default=1)) if orders else 1
