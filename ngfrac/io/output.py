@@ -281,16 +281,28 @@ class VTKSeries:
     folder : str or Path
         Where ``fields_00000.vtu``, ... and ``fields.pvd`` go.
     subdivision : int
-        Subdivisions per element (order - 1 shows P2 fields faithfully).
+        Subdivisions per element (order - 1 shows P2 fields faithfully); ``layout =
+        "subdivided"`` only.
 
     manifest : Manifest, optional
         Where each file is listed before it is written (``folder`` must be inside its folder).
     large : int
         Warn once when a snapshot's estimated size exceeds this many bytes.
+    layout : {"subdivided", "vertices"}
+        ``"subdivided"``: NGSolve's ``VTKOutput`` (ASCII, every element on its own, refined
+        ``subdivision`` times). ``"vertices"``: compressed binary, one point per vertex,
+        continuous fields at the vertices and the others as element averages
+        (:mod:`ngfrac.io.vtu`); a distributed mesh is written subdivided.
     """
 
+    LAYOUTS = ("subdivided", "vertices")
+
     def __init__(self, folder: str | Path, subdivision: int, stem: str = "fields",
-                 manifest: Manifest | None = None, large: int = LARGE_SNAPSHOT) -> None:
+                 manifest: Manifest | None = None, large: int = LARGE_SNAPSHOT,
+                 layout: str = "subdivided") -> None:
+        if layout not in self.LAYOUTS:
+            raise ValueError(f"layout = {layout!r}: choose one of {', '.join(self.LAYOUTS)}")
+        self.layout = layout
         folder = Path(folder)
         self.folder = folder
         self.large = large
@@ -350,6 +362,8 @@ class VTKSeries:
         Warns (a UserWarning naming ``output.vtk_subdivision``, once per series) before
         writing a file that :meth:`estimate_bytes` puts above :data:`LARGE_SNAPSHOT` bytes.
         """
+        if self.layout == "vertices" and mesh.comm.size == 1:
+            return self._write_vertices(mesh, fields, t)
         size = self.estimate_bytes(mesh, sum(cf.dim for cf in fields.values()))
         if size > self.large and not self._warned:
             self._warned = True  # once per series: adaptive meshes change the size every time
@@ -368,6 +382,20 @@ class VTKSeries:
         self._count += 1
         self._write_collection()
         return self.folder / (name + ".vtu")
+
+    def _write_vertices(self, mesh: ngs.Mesh, fields: dict[str, Any], t: float) -> Path:
+        """One snapshot as a compressed binary ``.vtu`` of the mesh's vertices
+        (:func:`ngfrac.io.vtu.write_vtu`)."""
+        from .vtu import snapshot_arrays, write_vtu
+
+        name = f"{self.stem}_{self._count:05d}.vtu"
+        points, cells, point_data, cell_data = snapshot_arrays(mesh, fields)
+        with self._writing(name):
+            write_vtu(self.folder / name, points, cells, point_data, cell_data)
+        self.entries.append((t, name))
+        self._count += 1
+        self._write_collection()
+        return self.folder / name
 
     @property
     def n_snapshots(self) -> int:

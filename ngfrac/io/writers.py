@@ -280,7 +280,11 @@ class VTKSnapshots(Writer):
                        else scene.discretization.order - 1)
         self.restart = folder.restart
         self.every = output.vtk_every
-        self.series = VTKSeries(folder.path / "vtk", subdivision, manifest=folder.manifest)
+        layout = output.vtk_format
+        if layout == "auto":
+            layout = "vertices" if scene.geometry.dim == 3 else "subdivided"
+        self.series = VTKSeries(folder.path / "vtk", subdivision, manifest=folder.manifest,
+                                layout=layout)
 
     def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if self.restart:

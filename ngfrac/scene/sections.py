@@ -831,6 +831,10 @@ class Discretization(_Section):
         return self.order_z or min(self.order, 2)
 
 
+VTK_FORMATS = ("auto", "subdivided", "vertices")
+"""Values of ``output.vtk_format``."""
+
+
 @dataclass(frozen=True)
 class Output(_Section):
     """What to write and how often (0 = never; for VTK: only the last step)."""
@@ -840,6 +844,11 @@ class Output(_Section):
     history_every: int = 1
     vtk_subdivision: int = -1
     """Subdivision of each element in VTK files; -1 means order - 1."""
+    vtk_format: str = "auto"
+    """``"subdivided"``: NGSolve's ASCII output, each element refined ``vtk_subdivision``
+    times (P2 fields faithfully); ``"vertices"``: compressed binary, one point per vertex,
+    other fields as element averages (fast, small); ``"auto"``: vertices in 3D, subdivided in
+    2D."""
     checkpoint_every: int = 50
     """A checkpoint (checkpoint.h5, written atomically) every N steps; 0 = never."""
     results: bool = True
@@ -854,6 +863,8 @@ class Output(_Section):
                  "must be in -1..5 (-1 = order - 1)")
         _require(self.checkpoint_every >= 0, s, "checkpoint_every", self.checkpoint_every,
                  "must be >= 0 (0 = never)")
+        _require(self.vtk_format in VTK_FORMATS, s, "vtk_format", self.vtk_format,
+                 f"choose one of {', '.join(repr(f) for f in VTK_FORMATS)}")
 
 
 SIZE_FIELDS = ("bands", "equidistributed")
