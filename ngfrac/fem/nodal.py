@@ -12,6 +12,13 @@ import numpy as np
 import ngsolve as ngs
 
 
+def vertex_dofs_first(fes: ngs.FESpace) -> bool:
+    """Whether a scalar H1 space numbers one dof per vertex first, in vertex order (NGSolve's
+    hierarchical basis does): then its first nv coefficients are the vertex values."""
+    nv = fes.mesh.nv
+    return bool(nv) and fes.ndof >= nv and tuple(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, nv - 1))) == (nv - 1,)
+
+
 class LagrangeNodes:
     """Node coordinates and value conversion for an order 1 or 2 ``H1`` space.
 

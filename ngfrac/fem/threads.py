@@ -18,8 +18,8 @@ of a scene then gives the same bits every time with a given thread count.
 faster on many cores, not reproducible bitwise.
 
 NGSolve's idle workers spin: with another busy process on the machine a threaded kernel can
-take hundreds of times its single-thread time (docs/benchmarks.md, "Threads on a busy
-machine"). So the assemblies of a step go through a :class:`ThreadChooser`: per kind of
+be far slower than on one thread (docs/benchmarks.md, "Threads on a busy machine"). So the
+assemblies of a step go through a :class:`ThreadChooser`: per kind of
 kernel it uses the threads or one thread, whichever took less wall time lately, and tries the
 other again after 8, 16, ..., 512 calls. Assembly gives the same bits with any thread count,
 so the choice changes timings only.
@@ -134,18 +134,18 @@ class ThreadChooser:
         self.timings: dict[str, _Timings] = {}
         self._lock = threading.Lock()
 
-    def _use_threads(self, t: _Timings) -> tuple[bool, bool]:
-        """(threaded, timed) for the next call."""
+    @staticmethod
+    def _plan(t: _Timings) -> tuple[bool, str]:
+        """Whether the next call runs threaded, and why: "warm-up" (not timed), "first" (a
+        mode's first timing), "trial" (the slower mode tried again) or "best"."""
         if t.calls == 1:
-            return True, False
-        if math.isnan(t.single):
-            return False, True
-        if math.isnan(t.threaded):
-            return True, True
+            return True, "warm-up"
+        if math.isnan(t.single) or math.isnan(t.threaded):
+            return math.isnan(t.threaded) and not math.isnan(t.single), "first"
         best = t.threaded <= t.single
         if t.calls >= t.next_trial:
-            return not best, True
-        return best, True
+            return not best, "trial"
+        return best, "best"
 
     @contextmanager
     def __call__(self, key: str) -> Iterator[None]:
@@ -156,15 +156,13 @@ class ThreadChooser:
         with self._lock:
             t = self.timings.setdefault(key, _Timings())
             t.calls += 1
-            use, timed = self._use_threads(t)
+            use, why = self._plan(t)
             best_before = t.threaded <= t.single
-            trial = timed and t.calls >= t.next_trial and not (math.isnan(t.single)
-                                                              or math.isnan(t.threaded))
         start = self.clock()
         with self.enter() if use else nullcontext():
             yield
         elapsed = self.clock() - start
-        if not timed:
+        if why == "warm-up":
             return
         with self._lock:
             old = t.threaded if use else t.single
@@ -173,12 +171,11 @@ class ThreadChooser:
                 t.threaded = new
             else:
                 t.single = new
-            if trial:
+            if why == "trial":
                 flipped = (t.threaded <= t.single) != best_before
                 t.interval = self.FIRST_INTERVAL if flipped else min(2 * t.interval,
                                                                      self.MAX_INTERVAL)
-                t.next_trial = t.calls + t.interval
-            elif t.next_trial == 0 and not (math.isnan(t.single) or math.isnan(t.threaded)):
+            if why == "trial" or (why == "first" and not math.isnan(t.single + t.threaded)):
                 t.next_trial = t.calls + t.interval
 
     def uses_threads(self, key: str) -> bool | None:

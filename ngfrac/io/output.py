@@ -291,7 +291,7 @@ class VTKSeries:
     layout : {"subdivided", "vertices"}
         ``"subdivided"``: NGSolve's ``VTKOutput`` (ASCII, every element on its own, refined
         ``subdivision`` times). ``"vertices"``: compressed binary, one point per vertex,
-        continuous fields at the vertices and the others as element averages
+        continuous fields at the vertices and the others at the element centroids
         (:mod:`ngfrac.io.vtu`); a distributed mesh is written subdivided.
     """
 
@@ -371,31 +371,36 @@ class VTKSeries:
                           f"{self.subdivision} will take about {size / 1e6:.0f} MB per file; "
                           "lower output.vtk_subdivision (each step down divides it by ~4 in 2D, "
                           "~8 in 3D) or raise output.vtk_every", stacklevel=2)
-        name = f"{self.stem}_{self._count:05d}"
+        name = self._next_name()
         output = ngs.VTKOutput(ma=mesh, coefs=list(fields.values()), names=list(fields),
                                filename=str(self.folder / name), subdivision=self.subdivision)
         if mesh.comm.size > 1:
             return self._write_parts(mesh.comm, output, name, t)
         with self._writing(name + ".vtu"):
             output.Do()
-        self.entries.append((t, name + ".vtu"))
-        self._count += 1
-        self._write_collection()
-        return self.folder / (name + ".vtu")
+        return self._listed(name + ".vtu", t)
 
     def _write_vertices(self, mesh: ngs.Mesh, fields: dict[str, Any], t: float) -> Path:
         """One snapshot as a compressed binary ``.vtu`` of the mesh's vertices
         (:func:`ngfrac.io.vtu.write_vtu`)."""
         from .vtu import snapshot_arrays, write_vtu
 
-        name = f"{self.stem}_{self._count:05d}.vtu"
+        name = self._next_name() + ".vtu"
         points, cells, point_data, cell_data = snapshot_arrays(mesh, fields)
         with self._writing(name):
             write_vtu(self.folder / name, points, cells, point_data, cell_data)
-        self.entries.append((t, name))
+        return self._listed(name, t)
+
+    def _next_name(self) -> str:
+        """The stem of the next snapshot's file(s)."""
+        return f"{self.stem}_{self._count:05d}"
+
+    def _listed(self, file: str, t: float) -> Path:
+        """Count a written one-file snapshot and list it in the collection."""
+        self.entries.append((t, file))
         self._count += 1
         self._write_collection()
-        return self.folder / name
+        return self.folder / file
 
     @property
     def n_snapshots(self) -> int:

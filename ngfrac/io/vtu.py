@@ -20,6 +20,7 @@ import numpy as np
 import ngsolve as ngs
 
 from ..fem.elements import ElementGeometry
+from ..fem.nodal import vertex_dofs_first
 
 __all__ = ["VTK_TRIANGLE", "VTK_TETRA", "snapshot_arrays", "write_vtu"]
 
@@ -113,8 +114,7 @@ def _vertex_values(gf: ngs.GridFunction, nv: int) -> np.ndarray | None:
     parts = gf.components if type(gf.space).__name__ == "VectorH1" else [gf]
     columns = []
     for part in parts:
-        fes = part.space
-        if fes.ndof < nv or tuple(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, nv - 1))) != (nv - 1,):
+        if not vertex_dofs_first(part.space):
             return None
         columns.append(part.vec.FV().NumPy()[:nv].copy())
     return columns[0] if len(columns) == 1 else np.column_stack(columns)

@@ -847,7 +847,7 @@ class Output(_Section):
     vtk_format: str = "auto"
     """``"subdivided"``: NGSolve's ASCII output, each element refined ``vtk_subdivision``
     times (P2 fields faithfully); ``"vertices"``: compressed binary, one point per vertex,
-    other fields as element averages (fast, small); ``"auto"``: vertices in 3D, subdivided in
+    other fields at the element centroids (fast, small); ``"auto"``: vertices in 3D, subdivided in
     2D."""
     checkpoint_every: int = 50
     """A checkpoint (checkpoint.h5, written atomically) every N steps; 0 = never."""

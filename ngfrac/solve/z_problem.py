@@ -25,6 +25,7 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
+from ..fem.nodal import vertex_dofs_first
 from ..physics.crack_models import CrackModel
 from ..scene import Scene
 from .context import StepContext
@@ -277,9 +278,8 @@ def _constant_one(fes: ngs.FESpace, like: ngs.BaseVector) -> ngs.BaseVector:
     values = ones.FV().NumPy()
     values[:] = 0.0
     mesh = fes.mesh
-    nv = mesh.nv
-    if nv and fes.ndof >= nv and tuple(fes.GetDofNrs(ngs.NodeId(ngs.VERTEX, nv - 1))) == (nv - 1,):
-        values[:nv] = 1.0  # H1 numbers the vertex dofs first, in vertex order
+    if vertex_dofs_first(fes):
+        values[:mesh.nv] = 1.0
     else:
         for vertex in mesh.vertices:
             for dof in fes.GetDofNrs(vertex):
