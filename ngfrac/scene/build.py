@@ -5,13 +5,14 @@ from __future__ import annotations
 from ..physics.crack_models import PFCZM, CrackModel, crack_model
 from ..physics.elastic import ELASTIC_MODELS, ElasticModel
 from .sections import Scene
+from .validation import check_model_fits
 
 __all__ = ["crack_model_of", "elastic_model_of"]
 
 
 def elastic_model_of(scene: Scene) -> ElasticModel:
     """The elastic model the scene asks for (checks that loads and moduli fit it)."""
-    scene.model.check(scene.material, scene.loads)
+    check_model_fits(scene.model, scene.material, scene.loads)
     kind = scene.model.kind
     if kind in ELASTIC_MODELS:
         return ELASTIC_MODELS[kind].of(scene.material)

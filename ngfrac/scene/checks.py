@@ -17,7 +17,8 @@ import numpy as np
 if TYPE_CHECKING:
     from ..geometry.domains import Domain
     from .expressions import Expression
-    from .sections import Geometry, Scene
+    from .geometry_section import Geometry
+    from .sections import Scene
 
 __all__ = ["crack_problems", "nonfinite_value", "check_times"]
 

@@ -6,7 +6,8 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from .sections import Scene, SceneError
+from .coercion import SceneError
+from .sections import Scene
 
 
 def parse_override(text: str) -> tuple[list[str], Any]:
