@@ -22,6 +22,8 @@ from typing import Any, Protocol, Sequence
 
 import ngsolve as ngs
 
+from .loads import LOAD_KINDS
+
 
 class LoadSpec(Protocol):
     """What a model reads of a load (a scene's ``[[loads]]`` entry, :class:`ngfrac.scene.Load`):
@@ -69,12 +71,9 @@ def dirichlet_loads(loads: Sequence[LoadSpec]) -> Sequence[LoadSpec]:
 
 
 def traction_of(load: LoadSpec, mesh: ngs.Mesh, t: ngs.Parameter) -> Any:
-    """The traction sigma n a Neumann load prescribes: its value, or -p n for a pressure."""
-    if load.kind == "pressure":
-        return -load.value.to_coefficient(t) * ngs.specialcf.normal(mesh.dim)
-    if isinstance(load.value, tuple):  # one expression per component
-        return ngs.CoefficientFunction(tuple(entry.to_coefficient(t) for entry in load.value))
-    return load.value.to_coefficient(t)
+    """The traction sigma n a Neumann load prescribes, as its kind gives it
+    (:data:`ngfrac.physics.loads.LOAD_KINDS`: the value, or -p n for a pressure)."""
+    return LOAD_KINDS[load.kind].traction(load.value, mesh, t)
 
 
 def boundary_work(mesh: ngs.Mesh, loads: Sequence[LoadSpec], t: ngs.Parameter, v: Any) -> Any | None:

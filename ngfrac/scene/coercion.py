@@ -110,7 +110,6 @@ class Components(tuple):
         return self.text
 
 
-
 def unknown_key_message(section: str, key: str, allowed: list[str]) -> str:
     """The one line for a key the section does not have, with the nearest valid one."""
     close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.5)

@@ -59,34 +59,34 @@ class Shape(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(self.type in self.KEYS, s, "type", self.type,
-                 f"choose one of {', '.join(self.KEYS)}")
+                f"choose one of {', '.join(self.KEYS)}")
         require(self.op in ("add", "cut", "intersect"), s, "op", self.op,
-                 "choose 'add' (union), 'cut' (difference) or 'intersect'")
+                "choose 'add' (union), 'cut' (difference) or 'intersect'")
         needed = self.KEYS[self.type]
         for f in dataclasses.fields(self):
             if f.name in ("type", "op"):
                 continue
             given = getattr(self, f.name) != f.default
             require(given == (f.name in needed), s, f.name, getattr(self, f.name),
-                     f"a {self.type} takes {', '.join(needed)}" if given
-                     else f"a {self.type} needs {f.name}")
+                    f"a {self.type} takes {', '.join(needed)}" if given
+                    else f"a {self.type} needs {f.name}")
         n = self.dim
         for key in ("corner", "center", "axis"):
             if key in needed:
                 require(len(getattr(self, key)) == n, s, key, list(getattr(self, key)),
-                         f"give {n} coordinates")
+                        f"give {n} coordinates")
         for key in ("size", "radii"):
             if key in needed:
                 require(len(getattr(self, key)) == (2 if key == "radii" else n)
-                         and min(getattr(self, key)) > 0, s, key, list(getattr(self, key)),
-                         "give positive lengths, one per axis")
+                        and min(getattr(self, key)) > 0, s, key, list(getattr(self, key)),
+                        "give positive lengths, one per axis")
         for key in ("radius", "height"):
             if key in needed:
                 require(getattr(self, key) > 0, s, key, getattr(self, key), "must be > 0")
         if self.type == "polygon":
             require(len(self.points) >= 3 and all(len(p) == 2 for p in self.points), s,
-                     "points", [list(p) for p in self.points],
-                     "a polygon needs at least three corners [[x, y], ...]")
+                    "points", [list(p) for p in self.points],
+                    "a polygon needs at least three corners [[x, y], ...]")
         if self.type == "cylinder":
             require(any(self.axis), s, "axis", list(self.axis), "the axis must not be zero")
 
@@ -116,13 +116,13 @@ class BoundarySelector(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(bool(self.name) and self.name != "crack", s, "name", self.name,
-                 "give a name other than '' and 'crack' (the initial cracks' edges)")
+                "give a name other than '' and 'crack' (the initial cracks' edges)")
         given = [k for k in self.SELECTORS if getattr(self, k)]
         require(len(given) == 1, s, "name", self.name,
-                 f"give exactly one of {', '.join(self.SELECTORS)} (given: {', '.join(given) or 'none'})")
+                f"give exactly one of {', '.join(self.SELECTORS)} (given: {', '.join(given) or 'none'})")
         if self.box:
             require(len(self.box) == 2 and len(self.box[0]) == len(self.box[1]) in (2, 3), s,
-                     "box", [list(p) for p in self.box], "give [[x0, y0], [x1, y1]] (3D: [x, y, z])")
+                    "box", [list(p) for p in self.box], "give [[x0, y0], [x1, y1]] (3D: [x, y, z])")
         if self.normal:
             require(any(self.normal), s, "normal", list(self.normal), "must not be zero")
         require(self.tol >= 0, s, "tol", self.tol, "must be >= 0 (0: 1e-6 of the diameter)")
@@ -179,28 +179,28 @@ class Geometry(Section):
                 if math.isnan(getattr(self, key)):
                     raise SceneError(f"missing key {dotted_key(s, key)!r}; it is required")
         require(self.kind in self.KINDS, s, "kind", self.kind,
-                 "choose 'rectangle' (2D), 'box' (3D) or 'occ' (CAD shapes or a file)")
+                "choose 'rectangle' (2D), 'box' (3D) or 'occ' (CAD shapes or a file)")
         require(self.mesh_size >= 0, s, "mesh_size", self.mesh_size,
-                 "must be > 0 (or 0 for epsilon/2)")
+                "must be > 0 (or 0 for epsilon/2)")
         if self.kind == "occ":
             self._validate_occ()
             return
         for key in self.OCC_KEYS:
             value = getattr(self, key)
             require(value == Geometry.__dataclass_fields__[key].default, s, key, plain(value),
-                     "only geometry.kind = 'occ' takes it")
+                    "only geometry.kind = 'occ' takes it")
         require(self.width > 0, s, "width", self.width, "must be > 0")
         require(self.height > 0, s, "height", self.height, "must be > 0")
         if self.kind == "box":
             if self.origin is Geometry.__dataclass_fields__["origin"].default:
                 object.__setattr__(self, "origin", (0.0, 0.0, 0.0))  # not given: the 3D zero
             require(len(self.origin) == 3, s, "origin", list(self.origin),
-                     "a box needs [x, y, z]")
+                    "a box needs [x, y, z]")
             require(self.depth > 0, s, "depth", self.depth, "a box needs depth > 0")
         else:
             require(len(self.origin) == 2, s, "origin", list(self.origin), "give [x, y]")
             require(self.depth == 0, s, "depth", self.depth,
-                     "only a box has a depth; set geometry.kind = 'box' or remove depth")
+                    "only a box has a depth; set geometry.kind = 'box' or remove depth")
 
     def _validate_occ(self) -> None:
         """Shapes or a file, no rectangle keys; building the domain checks the selectors."""
@@ -208,25 +208,25 @@ class Geometry(Section):
         for key in ("width", "height", "depth"):
             value = getattr(self, key)
             require(math.isnan(value) or value == 0, s, key, value,
-                     "an occ domain takes its extent from its shapes or file; remove it")
+                    "an occ domain takes its extent from its shapes or file; remove it")
         require(self.origin == (0.0, 0.0), s, "origin", list(self.origin),
-                 "an occ domain has no origin; move its shapes")
+                "an occ domain has no origin; move its shapes")
         require(bool(self.shapes) != bool(self.file), s, "shapes",
-                 [f"{shape.type}" for shape in self.shapes],
-                 "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
+                [f"{shape.type}" for shape in self.shapes],
+                "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
         require(self.scale > 0, s, "scale", self.scale, "must be > 0")
         for point in self.split_points:
             require(len(point) == 2, s, "split_points", [list(p) for p in self.split_points],
-                     "give points [x, y] on the edges of a 2D domain")
+                    "give points [x, y] on the edges of a 2D domain")
         require(bool(self.default_boundary) and self.default_boundary != "crack", s,
-                 "default_boundary", self.default_boundary, "give a name other than '' and 'crack'")
+                "default_boundary", self.default_boundary, "give a name other than '' and 'crack'")
         if self.shapes:
             require(self.shapes[0].op == "add", s, "shapes[0].op", self.shapes[0].op,
-                     "the first shape starts the domain: use op = 'add'")
+                    "the first shape starts the domain: use op = 'add'")
             dims = {shape.dim for shape in self.shapes}
             require(len(dims) == 1, s, "shapes", [shape.type for shape in self.shapes],
-                     f"mix no plane shapes ({', '.join(SHAPE_TYPES_2D)}) with solids "
-                     f"({', '.join(SHAPE_TYPES_3D)})")
+                    f"mix no plane shapes ({', '.join(SHAPE_TYPES_2D)}) with solids "
+                    f"({', '.join(SHAPE_TYPES_3D)})")
         self.domain()  # raises SceneError for a selector that matches nothing or a conflict
 
     @property
@@ -324,25 +324,25 @@ class Crack(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(len(self.points) >= 2, s, "points", self.points,
-                 "a crack needs at least two points [[x0, y0], [x1, y1], ...]")
+                "a crack needs at least two points [[x0, y0], [x1, y1], ...]")
         dim = len(self.points[0])
         for point in self.points:
             require(len(point) in (2, 3) and len(point) == dim, s, "points", list(point),
-                     "each point is [x, y] (2D) or [x, y, z] (3D), all of the same length")
+                    "each point is [x, y] (2D) or [x, y, z] (3D), all of the same length")
         if dim == 3:
             require(len(self.points) >= 3, s, "points", [list(p) for p in self.points],
-                     "a 3D crack is a planar polygon with at least three corners [[x, y, z], ...]")
+                    "a 3D crack is a planar polygon with at least three corners [[x, y, z], ...]")
             corners = np.asarray(self.points, dtype=float)
             normal = self.normal
             size = float(np.ptp(corners, axis=0).max())
             require(float(np.linalg.norm(normal)) > 0, s, "points",
-                     [list(p) for p in self.points],
-                     "the polygon has no area; give corners that span a plane")
+                    [list(p) for p in self.points],
+                    "the polygon has no area; give corners that span a plane")
             offsets = np.abs((corners - corners[0]) @ normal)
             require(offsets.max() <= self.PLANAR_TOL * size, s, "points",
-                     [list(p) for p in self.points],
-                     f"a 3D crack must be planar (a corner is {offsets.max():.3g} off the plane "
-                     "of the others)")
+                    [list(p) for p in self.points],
+                    f"a 3D crack must be planar (a corner is {offsets.max():.3g} off the plane "
+                    "of the others)")
 
     @property
     def dim(self) -> int:
@@ -357,7 +357,6 @@ class Crack(Section):
         length = float(np.linalg.norm(normal))
         scale = float(np.ptp(corners, axis=0).max()) ** 2
         return normal / length if length > 1e-12 * scale else np.zeros(3)
-
 
 
 def occ_domain_of(geometry: "Geometry") -> "Domain":

@@ -20,6 +20,7 @@ from typing import Any, ClassVar, Mapping
 
 from ..physics.crack_models import CRACK_MODELS, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
+from ..physics.loads import LOAD_KINDS  # noqa: F401 (re-exported: the values of loads[i].kind)
 from .coercion import (FREE, REQUIRED, Components, SceneError, Section,  # noqa: F401 (re-exported)
                        build_section, dotted_key, require, unknown_key_message)
 from .expressions import Expression
@@ -104,23 +105,23 @@ class Material(Section):
             require(self.mu > 0, s, "mu", self.mu, "the shear modulus must be > 0")
         if "lam" in self.moduli:
             require(3 * self.lam + 2 * self.mu > 0, s, "lam", self.lam,
-                     f"must be > -2 mu/3 = {-2 * self.mu / 3:g} (a Poisson ratio above -1)")
+                    f"must be > -2 mu/3 = {-2 * self.mu / 3:g} (a Poisson ratio above -1)")
         if "E" in self.moduli:
             require(self.E > 0, s, "E", self.E, "Young's modulus must be > 0")
             require(-1 < self.nu < 0.5, s, "nu", self.nu, "Poisson's ratio must be in (-1, 0.5)")
         if isinstance(self.body_force, Components):
             require(len(self.body_force) > 0 and not any(self.body_force.free), s, "body_force",
-                     self.body_force.text, "give one expression per component, none 'free'")
+                    self.body_force.text, "give one expression per component, none 'free'")
         if "t" in self.gamma.names:
             raise SceneError(f"material.gamma = {self.gamma.text!r} may not depend on t")
         require(self.split in ("none", "amor", "miehe"), s, "split", self.split,
-                 "choose 'none' (the paper's model), 'amor' or 'miehe'")
+                "choose 'none' (the paper's model), 'amor' or 'miehe'")
         require(self.split_mode in ("full", "hybrid"), s, "split_mode", self.split_mode,
-                 "choose 'full' (psi+ degraded, Newton) or 'hybrid' (Ambati et al.)")
+                "choose 'full' (psi+ degraded, Newton) or 'hybrid' (Ambati et al.)")
         require(self.split_mode == "full" or self.split != "none", s, "split_mode",
-                 self.split_mode, "'hybrid' needs a split: set material.split = 'amor' or 'miehe'")
+                self.split_mode, "'hybrid' needs a split: set material.split = 'amor' or 'miehe'")
         require(math.isnan(self.strength) or (self.strength > 0 and math.isfinite(self.strength)),
-                 s, "strength", self.strength, "the tensile strength f_t must be > 0")
+                s, "strength", self.strength, "the tensile strength f_t must be > 0")
 
     @property
     def moduli(self) -> tuple[str, ...]:
@@ -184,30 +185,26 @@ class PhaseField(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(self.crack_pressure.names <= {"t"}, s, "crack_pressure", self.crack_pressure.text,
-                 "an expression in t only (a pressure uniform in the crack)")
+                "an expression in t only (a pressure uniform in the crack)")
         require(self.epsilon > 0, s, "epsilon", self.epsilon, "the regularization length must be > 0")
         require(self.alpha2 > 0, s, "alpha2", self.alpha2, "the time constant of z must be > 0")
         require(self.alpha1 >= 0, s, "alpha1", self.alpha1, "must be >= 0 (0 = quasi-static u)")
         require(0 < self.residual_stiffness < 1e-1, s, "residual_stiffness",
-                 self.residual_stiffness, "must be in (0, 0.1); 1e-6 is typical")
+                self.residual_stiffness, "must be in (0, 0.1); 1e-6 is typical")
         require(self.model in CRACK_MODELS, s, "model", self.model,
-                 f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
+                f"choose {' or '.join(repr(m) for m in CRACK_MODELS)}")
         require(self.softening in SOFTENING_LAWS, s, "softening", self.softening,
-                 f"choose {' or '.join(repr(m) for m in SOFTENING_LAWS)}")
+                f"choose {' or '.join(repr(m) for m in SOFTENING_LAWS)}")
         require(self.drive in ("energy", "rankine"), s, "drive", self.drive,
-                 "choose 'energy' (sigma:e) or 'rankine' (<sigma_1>^2/E, PF-CZM)")
+                "choose 'energy' (sigma:e) or 'rankine' (<sigma_1>^2/E, PF-CZM)")
         require(self.drive == "energy" or self.model == "PF-CZM", s, "drive", self.drive,
-                 "'rankine' is PF-CZM's drive: set phase_field.model = 'PF-CZM'")
+                "'rankine' is PF-CZM's drive: set phase_field.model = 'PF-CZM'")
 
     @property
     def pressurized(self) -> bool:
         """Whether a crack pressure is set (``crack_pressure`` not the constant 0)."""
         p = self.crack_pressure
         return not (p.is_constant and p.value() == 0)
-
-
-LOAD_KINDS = ("displacement", "traction", "pressure")
-"""What a load prescribes on its boundary (``loads[i].kind``)."""
 
 
 @dataclass(frozen=True)
@@ -230,22 +227,19 @@ class Load(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(self.kind in LOAD_KINDS, s, "kind", self.kind,
-                 f"choose {', '.join(repr(k) for k in LOAD_KINDS)}")
-        if self.kind == "pressure":
-            require(not isinstance(self.value, Components), s, "value", _plain_value(self.value),
-                     "a pressure is one expression p(x, y, t) (it acts as -p n), not a list")
+                f"choose {', '.join(repr(k) for k in LOAD_KINDS)}")
+        problem = LOAD_KINDS[self.kind].value_problem(self.value)
+        if problem is not None:
+            require(False, s, "value", *problem)
         if isinstance(self.value, Components):
             require(len(self.value) > 0, s, "value", [], "give [ux, uy]")
-            if self.kind == "traction":
-                require(not any(self.value.free), s, "value", self.value.text,
-                         "a traction gives every component (use \"0\", not \"free\")")
             require(not all(self.value.free), s, "value", self.value.text,
-                     "every component is free, so the load constrains nothing; remove it")
+                    "every component is free, so the load constrains nothing; remove it")
 
     @property
     def is_dirichlet(self) -> bool:
-        """Whether the load prescribes u (``kind = "displacement"``)."""
-        return self.kind == "displacement"
+        """Whether the load prescribes u (``kind = "displacement"``; the kind's ``dirichlet``)."""
+        return LOAD_KINDS[self.kind].dirichlet
 
     @property
     def free(self) -> tuple[bool, ...]:
@@ -255,10 +249,6 @@ class Load(Section):
             n = len(self.value) if isinstance(self.value, Components) else 1
             return (True,) * n
         return self.value.free if isinstance(self.value, Components) else (False,)
-
-
-def _plain_value(value: Expression | Components) -> Any:
-    return [str(e) for e in value] if isinstance(value, Components) else value.text
 
 
 @dataclass(frozen=True)
@@ -284,7 +274,7 @@ class TimeSettings(Section):
         require(self.dt > 0, s, "dt", self.dt, "the time step must be > 0")
         require(self.t_end > 0, s, "t_end", self.t_end, "the end time must be > 0")
         require(0 <= self.max_doublings <= 12, s, "max_doublings", self.max_doublings,
-                 "must be in 0..12 (the largest step is dt * 2**max_doublings)")
+                "must be in 0..12 (the largest step is dt * 2**max_doublings)")
         require(0 < self.dz_target <= 1, s, "dz_target", self.dz_target, "must be in (0, 1]")
 
     @property
@@ -343,24 +333,24 @@ class Discretization(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(not self.concurrent_substeps or self.coupling == "paper", s,
-                 "concurrent_substeps", True, "it needs coupling = 'paper' (with 'staggered' "
-                 "the z-sub-step waits for the new u)")
+                "concurrent_substeps", True, "it needs coupling = 'paper' (with 'staggered' "
+                "the z-sub-step waits for the new u)")
         require(not (self.concurrent_substeps and self.threaded_solves), s,
-                 "concurrent_substeps", True, "threaded_solves = true excludes it (the two "
-                 "sub-steps on one NGSolve thread each, or one after the other on all)")
+                "concurrent_substeps", True, "threaded_solves = true excludes it (the two "
+                "sub-steps on one NGSolve thread each, or one after the other on all)")
         require(1 <= self.order <= 6, s, "order", self.order, "must be an integer in 1..6")
         require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
-                 "must be 1 or 2 (0 = min(order, 2))")
+                "must be 1 or 2 (0 = min(order, 2))")
         require(self.u_solver in ("sparsecholesky", "umfpack", "cg"), s, "u_solver",
-                 self.u_solver, "choose 'sparsecholesky', 'umfpack' or 'cg' (with BDDC)")
+                self.u_solver, "choose 'sparsecholesky', 'umfpack' or 'cg' (with BDDC)")
         require(self.z_solver in ("cg", "sparsecholesky", "umfpack"), s, "z_solver",
-                 self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
+                self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
         require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
-                 "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
+                "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
         require(self.z_update in Z_UPDATES, s, "z_update", self.z_update,
-                 "choose 'auto', 'projection' (the paper's min(1, max(z_trial, z_old))), "
-                 "'descent' (the projection, shortened where it would raise the z-step's "
-                 "energy) or 'obstacle' (the z-step minimized under z >= z_old)")
+                "choose 'auto', 'projection' (the paper's min(1, max(z_trial, z_old))), "
+                "'descent' (the projection, shortened where it would raise the z-step's "
+                "energy) or 'obstacle' (the z-step minimized under z >= z_old)")
 
     @property
     def z_order(self) -> int:
@@ -393,14 +383,14 @@ class Output(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(self.vtk_every >= 0, s, "vtk_every", self.vtk_every,
-                 "must be >= 0 (0: only the last step)")
+                "must be >= 0 (0: only the last step)")
         require(self.history_every >= 1, s, "history_every", self.history_every, "must be >= 1")
         require(-1 <= self.vtk_subdivision <= 5, s, "vtk_subdivision", self.vtk_subdivision,
-                 "must be in -1..5 (-1 = order - 1)")
+                "must be in -1..5 (-1 = order - 1)")
         require(self.checkpoint_every >= 0, s, "checkpoint_every", self.checkpoint_every,
-                 "must be >= 0 (0 = never)")
+                "must be >= 0 (0 = never)")
         require(self.vtk_format in VTK_FORMATS, s, "vtk_format", self.vtk_format,
-                 f"choose one of {', '.join(repr(f) for f in VTK_FORMATS)}")
+                f"choose one of {', '.join(repr(f) for f in VTK_FORMATS)}")
 
 
 SIZE_FIELDS = ("bands", "equidistributed")
@@ -446,9 +436,9 @@ class Adaptivity(Section):
     def validate(self) -> None:
         s = self.SECTION
         require(self.estimator in ("zz", "residual"), s, "estimator", self.estimator,
-                 "choose 'zz' or 'residual'")
+                "choose 'zz' or 'residual'")
         require(self.size_field in SIZE_FIELDS, s, "size_field", self.size_field,
-                 "choose 'bands' or 'equidistributed'")
+                "choose 'bands' or 'equidistributed'")
         require(self.every >= 1, s, "every", self.every, "must be >= 1 (steps between checks)")
         require(self.max_vertices >= 100, s, "max_vertices", self.max_vertices, "must be >= 100")
         require(self.hmin > 0, s, "hmin", self.hmin, "must be > 0")

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..physics.crack_models import PFCZM
+from ..physics.loads import LOAD_KINDS
 from .checks import check_times, crack_problems, nonfinite_value
 from .coercion import Components, SceneError
 from .expressions import Expression
@@ -96,12 +97,12 @@ def check_model_fits(model: "Model", material: "Material", loads: tuple["Load", 
     """
     kind, n = model.kind, model.n_components
     for i, load in enumerate(loads):
-        if load.kind == "pressure":
-            if n == 1:
-                raise SceneError(f"loads[{i}].kind = 'pressure' needs a plane or 3D model, but "
-                                 "model.kind = 'mode3' has no normal displacement; use "
-                                 "kind = 'traction' (the out-of-plane shear stress)")
-            continue  # one expression (Load.validate)
+        load_kind = LOAD_KINDS[load.kind]
+        problem = load_kind.model_problem(kind, n)
+        if problem is not None:
+            raise SceneError(f"loads[{i}].kind = {load.kind!r} {problem}")
+        if load_kind.scalar:
+            continue  # one expression whatever the model (Load.validate)
         if n == 1 and isinstance(load.value, Components):
             raise SceneError(f"loads[{i}].value = {load.value.text} is a list, but model.kind = "
                              "'mode3' takes one expression (the out-of-plane displacement)")
