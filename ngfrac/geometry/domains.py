@@ -80,6 +80,11 @@ class Domain(Protocol):
         """Largest distance between two points of the domain."""
 
     @property
+    def curved(self) -> bool:
+        """Whether a boundary edge (face) is curved, so that meshes of order >= 2 are curved
+        (:meth:`ngfrac.geometry.cad.OccDomain.curve`)."""
+
+    @property
     def shortest_side(self) -> float:
         """Smallest extent of the domain."""
 
@@ -131,6 +136,11 @@ class _AxisAligned:
     @property
     def diameter(self) -> float:
         return math.hypot(*self.extent)
+
+    @property
+    def curved(self) -> bool:
+        """Never: the sides are straight."""
+        return False
 
     @property
     def shortest_side(self) -> float:

@@ -45,7 +45,7 @@ class MeshFields:
         minimizes exactly the energy that the diagnostics report.
         """
         disc = scene.discretization
-        curved = disc.order >= 2 and scene.geometry.kind == "occ" and scene.geometry.domain().curved
+        curved = disc.order >= 2 and scene.geometry.domain().curved
         if curved:  # curved boundaries (ngfrac.geometry.cad): isoparametric u
             scene.geometry.domain().curve(mesh, disc.order, [c.points for c in scene.cracks])
         fes_u = model.space(mesh, disc.order, scene.loads)

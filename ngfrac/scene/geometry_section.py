@@ -13,13 +13,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from ..geometry.domains import Box, Rectangle
 from .coercion import REQUIRED, SceneError, Section, dotted_key, plain, require
 
 if TYPE_CHECKING:
     from ..geometry.domains import Domain
 
-__all__ = ["SHAPE_TYPES_2D", "SHAPE_TYPES_3D", "BoundarySelector", "Crack", "Geometry", "Shape",
-           "occ_domain_of"]
+__all__ = ["GEOMETRY_KINDS", "OCC_KEYS", "SHAPE_TYPES_2D", "SHAPE_TYPES_3D", "AxisAlignedKind",
+           "BoundarySelector", "BoxKind", "Crack", "Geometry", "GeometryKind", "OccKind",
+           "RectangleKind", "Shape", "occ_domain_of"]
 
 
 SHAPE_TYPES_2D = ("rectangle", "circle", "ellipse", "polygon")
@@ -135,6 +137,167 @@ class BoundarySelector(Section):
         return f"name = {self.name!r}, {key} = {text}"
 
 
+OCC_KEYS = ("shapes", "boundaries", "file", "scale", "default_boundary", "split_points")
+"""The keys of ``geometry.kind = "occ"`` only."""
+
+
+class GeometryKind:
+    """How one ``geometry.kind`` is checked and built from the ``[geometry]`` section
+    (subclass per kind, its name in :data:`GEOMETRY_KINDS`); the domain itself is a class of
+    :mod:`ngfrac.geometry` (the :class:`~ngfrac.geometry.domains.Domain` protocol)."""
+
+    name: ClassVar[str]
+    choice: ClassVar[str]
+    """The kind as the message for an unknown kind offers it: ``'box' (3D)``."""
+    required_keys: ClassVar[tuple[str, ...]] = ()
+    """Keys this kind needs (NaN when not given)."""
+    foreign_keys: ClassVar[tuple[str, ...]] = ()
+    """Keys of other kinds that this kind refuses and ``to_dict`` leaves out."""
+
+    def validate(self, geometry: "Geometry") -> None:
+        """The kind's own checks of the section (after ``kind`` and ``mesh_size``)."""
+
+    def domain(self, geometry: "Geometry") -> "Domain":
+        """The domain of a validated section."""
+        raise NotImplementedError
+
+    def describe(self, geometry: "Geometry") -> str:
+        """The domain as messages name it (``cracks[i].points ... lies outside the domain``)."""
+        raise NotImplementedError
+
+    def dimension_problem(self, geometry: "Geometry", model_kind: str,
+                          kinds_3d: tuple[str, ...], kinds_2d: tuple[str, ...]) -> str | None:
+        """Why the domain's dimension does not fit ``model.kind`` (3D models
+        ``kinds_3d``, 2D ones ``kinds_2d``), or None."""
+        return None
+
+
+class AxisAlignedKind(GeometryKind):
+    """The rectangle and the box: width, height (a box also depth) and an origin."""
+
+    required_keys = ("width", "height")
+    foreign_keys = OCC_KEYS
+
+    def validate(self, geometry: "Geometry") -> None:
+        s = geometry.SECTION
+        for key in OCC_KEYS:
+            value = getattr(geometry, key)
+            require(value == Geometry.__dataclass_fields__[key].default, s, key, plain(value),
+                    "only geometry.kind = 'occ' takes it")
+        require(geometry.width > 0, s, "width", geometry.width, "must be > 0")
+        require(geometry.height > 0, s, "height", geometry.height, "must be > 0")
+
+    def describe(self, geometry: "Geometry") -> str:
+        return " x ".join(f"[{o}, {o + e}]" for o, e in zip(geometry.origin, geometry.extent))
+
+    def dimension_problem(self, geometry: "Geometry", model_kind: str,
+                          kinds_3d: tuple[str, ...], kinds_2d: tuple[str, ...]) -> str | None:
+        if model_kind in kinds_3d and geometry.dim != 3:
+            return (f"model.kind = {model_kind!r} is 3D but geometry.kind = {self.name!r} is 2D; "
+                    "set geometry.kind = 'box' (with depth)")
+        if model_kind not in kinds_3d and geometry.dim == 3:
+            return (f"geometry.kind = {self.name!r} is 3D but model.kind = {model_kind!r} is 2D; "
+                    f"set model.kind = {kinds_3d[0]!r}")
+        return None
+
+
+class RectangleKind(AxisAlignedKind):
+    """``geometry.kind = "rectangle"``: :class:`ngfrac.geometry.domains.Rectangle`."""
+
+    name = "rectangle"
+    choice = "'rectangle' (2D)"
+
+    def validate(self, geometry: "Geometry") -> None:
+        super().validate(geometry)
+        s = geometry.SECTION
+        require(len(geometry.origin) == 2, s, "origin", list(geometry.origin), "give [x, y]")
+        require(geometry.depth == 0, s, "depth", geometry.depth,
+                "only a box has a depth; set geometry.kind = 'box' or remove depth")
+
+    def domain(self, geometry: "Geometry") -> "Domain":
+        return Rectangle(geometry.width, geometry.height, tuple(geometry.origin))
+
+
+class BoxKind(AxisAlignedKind):
+    """``geometry.kind = "box"``: :class:`ngfrac.geometry.domains.Box`."""
+
+    name = "box"
+    choice = "'box' (3D)"
+
+    def validate(self, geometry: "Geometry") -> None:
+        super().validate(geometry)
+        s = geometry.SECTION
+        if geometry.origin is Geometry.__dataclass_fields__["origin"].default:
+            object.__setattr__(geometry, "origin", (0.0, 0.0, 0.0))  # not given: the 3D zero
+        require(len(geometry.origin) == 3, s, "origin", list(geometry.origin),
+                "a box needs [x, y, z]")
+        require(geometry.depth > 0, s, "depth", geometry.depth, "a box needs depth > 0")
+
+    def domain(self, geometry: "Geometry") -> "Domain":
+        return Box(geometry.width, geometry.height, geometry.depth, tuple(geometry.origin))
+
+
+class OccKind(GeometryKind):
+    """``geometry.kind = "occ"``: shapes or a CAD file, :class:`ngfrac.geometry.cad.OccDomain`
+    (:func:`occ_domain_of`)."""
+
+    name = "occ"
+    choice = "'occ' (CAD shapes or a file)"
+
+    def validate(self, geometry: "Geometry") -> None:
+        """Shapes or a file, no rectangle keys; building the domain checks the selectors."""
+        s = geometry.SECTION
+        for key in ("width", "height", "depth"):
+            value = getattr(geometry, key)
+            require(math.isnan(value) or value == 0, s, key, value,
+                    "an occ domain takes its extent from its shapes or file; remove it")
+        require(geometry.origin == (0.0, 0.0), s, "origin", list(geometry.origin),
+                "an occ domain has no origin; move its shapes")
+        require(bool(geometry.shapes) != bool(geometry.file), s, "shapes",
+                [f"{shape.type}" for shape in geometry.shapes],
+                "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
+        require(geometry.scale > 0, s, "scale", geometry.scale, "must be > 0")
+        for point in geometry.split_points:
+            require(len(point) == 2, s, "split_points", [list(p) for p in geometry.split_points],
+                    "give points [x, y] on the edges of a 2D domain")
+        require(bool(geometry.default_boundary) and geometry.default_boundary != "crack", s,
+                "default_boundary", geometry.default_boundary,
+                "give a name other than '' and 'crack'")
+        if geometry.shapes:
+            require(geometry.shapes[0].op == "add", s, "shapes[0].op", geometry.shapes[0].op,
+                    "the first shape starts the domain: use op = 'add'")
+            dims = {shape.dim for shape in geometry.shapes}
+            require(len(dims) == 1, s, "shapes", [shape.type for shape in geometry.shapes],
+                    f"mix no plane shapes ({', '.join(SHAPE_TYPES_2D)}) with solids "
+                    f"({', '.join(SHAPE_TYPES_3D)})")
+        geometry.domain()  # raises SceneError for a selector that matches nothing or a conflict
+
+    def domain(self, geometry: "Geometry") -> "Domain":
+        return occ_domain_of(geometry)
+
+    def describe(self, geometry: "Geometry") -> str:
+        return "(the occ shape)"
+
+    def dimension_problem(self, geometry: "Geometry", model_kind: str,
+                          kinds_3d: tuple[str, ...], kinds_2d: tuple[str, ...]) -> str | None:
+        """A CAD file or shapes of the other dimension than the model's."""
+        dim = geometry.dim
+        source = f"geometry.file = {geometry.file!r}" if geometry.file else "geometry.shapes"
+        models_2d = ", ".join(repr(k) for k in kinds_2d)
+        if model_kind in kinds_3d and dim != 3:
+            return (f"{source} is 2D (faces, no solid) but model.kind = {model_kind!r} is 3D; "
+                    f"give a solid or a 2D model.kind ({models_2d})")
+        if model_kind not in kinds_3d and dim == 3:
+            return (f"{source} is 3D (a solid) but model.kind = {model_kind!r} is 2D; set "
+                    f"model.kind = {kinds_3d[0]!r} or give a planar face in z = 0")
+        return None
+
+
+GEOMETRY_KINDS: dict[str, GeometryKind] = {kind.name: kind()
+                                          for kind in (RectangleKind, BoxKind, OccKind)}
+"""The values of ``geometry.kind``, in the order messages list them."""
+
+
 @dataclass(frozen=True)
 class Geometry(Section):
     """The domain: an axis-parallel rectangle (2D) or box (3D), or a CAD shape (``occ``).
@@ -149,9 +312,9 @@ class Geometry(Section):
     """
 
     SECTION: ClassVar[str] = "geometry"
-    KINDS: ClassVar[tuple[str, ...]] = ("rectangle", "box", "occ")
-    OCC_KEYS: ClassVar[tuple[str, ...]] = ("shapes", "boundaries", "file", "scale",
-                                           "default_boundary", "split_points")
+    KINDS: ClassVar[tuple[str, ...]] = tuple(GEOMETRY_KINDS)
+    """The values of ``kind``: the keys of :data:`GEOMETRY_KINDS`."""
+    OCC_KEYS: ClassVar[tuple[str, ...]] = OCC_KEYS
     BOUNDARIES: ClassVar[tuple[str, ...]] = ("bottom", "right", "top", "left")
     BOUNDARIES_3D: ClassVar[tuple[str, ...]] = ("left", "right", "bottom", "top", "back", "front")
     width: float = math.nan
@@ -174,74 +337,31 @@ class Geometry(Section):
 
     def validate(self) -> None:
         s = self.SECTION
-        if self.kind in ("rectangle", "box"):
-            for key in ("width", "height"):
-                if math.isnan(getattr(self, key)):
-                    raise SceneError(f"missing key {dotted_key(s, key)!r}; it is required")
-        require(self.kind in self.KINDS, s, "kind", self.kind,
-                "choose 'rectangle' (2D), 'box' (3D) or 'occ' (CAD shapes or a file)")
+        kind = GEOMETRY_KINDS.get(self.kind)
+        for key in kind.required_keys if kind else ():
+            if math.isnan(getattr(self, key)):
+                raise SceneError(f"missing key {dotted_key(s, key)!r}; it is required")
+        choices = [k.choice for k in GEOMETRY_KINDS.values()]
+        require(kind is not None, s, "kind", self.kind,
+                f"choose {', '.join(choices[:-1])} or {choices[-1]}")
         require(self.mesh_size >= 0, s, "mesh_size", self.mesh_size,
                 "must be > 0 (or 0 for epsilon/2)")
-        if self.kind == "occ":
-            self._validate_occ()
-            return
-        for key in self.OCC_KEYS:
-            value = getattr(self, key)
-            require(value == Geometry.__dataclass_fields__[key].default, s, key, plain(value),
-                    "only geometry.kind = 'occ' takes it")
-        require(self.width > 0, s, "width", self.width, "must be > 0")
-        require(self.height > 0, s, "height", self.height, "must be > 0")
-        if self.kind == "box":
-            if self.origin is Geometry.__dataclass_fields__["origin"].default:
-                object.__setattr__(self, "origin", (0.0, 0.0, 0.0))  # not given: the 3D zero
-            require(len(self.origin) == 3, s, "origin", list(self.origin),
-                    "a box needs [x, y, z]")
-            require(self.depth > 0, s, "depth", self.depth, "a box needs depth > 0")
-        else:
-            require(len(self.origin) == 2, s, "origin", list(self.origin), "give [x, y]")
-            require(self.depth == 0, s, "depth", self.depth,
-                    "only a box has a depth; set geometry.kind = 'box' or remove depth")
+        kind.validate(self)
 
-    def _validate_occ(self) -> None:
-        """Shapes or a file, no rectangle keys; building the domain checks the selectors."""
-        s = self.SECTION
-        for key in ("width", "height", "depth"):
-            value = getattr(self, key)
-            require(math.isnan(value) or value == 0, s, key, value,
-                    "an occ domain takes its extent from its shapes or file; remove it")
-        require(self.origin == (0.0, 0.0), s, "origin", list(self.origin),
-                "an occ domain has no origin; move its shapes")
-        require(bool(self.shapes) != bool(self.file), s, "shapes",
-                [f"{shape.type}" for shape in self.shapes],
-                "give [[geometry.shapes]] or geometry.file, not both (nor neither)")
-        require(self.scale > 0, s, "scale", self.scale, "must be > 0")
-        for point in self.split_points:
-            require(len(point) == 2, s, "split_points", [list(p) for p in self.split_points],
-                    "give points [x, y] on the edges of a 2D domain")
-        require(bool(self.default_boundary) and self.default_boundary != "crack", s,
-                "default_boundary", self.default_boundary, "give a name other than '' and 'crack'")
-        if self.shapes:
-            require(self.shapes[0].op == "add", s, "shapes[0].op", self.shapes[0].op,
-                    "the first shape starts the domain: use op = 'add'")
-            dims = {shape.dim for shape in self.shapes}
-            require(len(dims) == 1, s, "shapes", [shape.type for shape in self.shapes],
-                    f"mix no plane shapes ({', '.join(SHAPE_TYPES_2D)}) with solids "
-                    f"({', '.join(SHAPE_TYPES_3D)})")
-        self.domain()  # raises SceneError for a selector that matches nothing or a conflict
+    @property
+    def kind_of(self) -> "GeometryKind":
+        """The :class:`GeometryKind` of ``kind`` (:data:`GEOMETRY_KINDS`)."""
+        return GEOMETRY_KINDS[self.kind]
 
     @property
     def dim(self) -> int:
-        """2 for a rectangle, 3 for a box; an occ domain's own."""
-        if self.kind == "occ":
-            return self.domain().dim
-        return 3 if self.kind == "box" else 2
+        """2 or 3: the domain's (a rectangle's 2, a box's 3, an occ domain's own)."""
+        return self.domain().dim
 
     @property
     def extent(self) -> tuple[float, ...]:
         """(width, height) or (width, height, depth); an occ domain's bounding box."""
-        if self.kind == "occ":
-            return self.domain().extent
-        return (self.width, self.height, self.depth)[: self.dim]
+        return self.domain().extent
 
     @property
     def shortest_side(self) -> float:
@@ -249,29 +369,25 @@ class Geometry(Section):
 
     @property
     def boundary_names(self) -> tuple[str, ...]:
-        if self.kind == "occ":
-            return self.domain().boundary_names
-        return self.BOUNDARIES_3D if self.dim == 3 else self.BOUNDARIES
+        return self.domain().boundary_names
+
+    def describe(self) -> str:
+        """The domain as messages name it: ``[0, 1] x [0, 2]``, or ``(the occ shape)``."""
+        return self.kind_of.describe(self)
 
     def domain(self) -> "Domain":
-        """The domain this section describes: its
-        boundary and containment tests, measure and sample points live there. An occ domain
-        is built once per section (OCC work) and kept."""
-        from ..geometry.domains import Box, Rectangle
-
-        if self.kind == "box":
-            return Box(self.width, self.height, self.depth, tuple(self.origin))
-        if self.kind == "rectangle":
-            return Rectangle(self.width, self.height, tuple(self.origin))
+        """The domain this section describes (:meth:`GeometryKind.domain`): its boundary and
+        containment tests, measure and sample points live there. It is built once per
+        section (for an occ domain OCC work) and kept, so every caller gets the one object."""
         built = self.__dict__.get("_domain")
         if built is None:
-            built = occ_domain_of(self)
+            built = self.kind_of.domain(self)
             object.__setattr__(self, "_domain", built)
         return built
 
     def __getstate__(self) -> dict[str, Any]:
-        """Copies and pickles leave out the built occ domain (OCC shapes do not pickle);
-        they build it again from ``shapes`` or ``file``."""
+        """Copies and pickles leave out the built domain (OCC shapes do not pickle); they
+        build it again from the keys (``shapes`` or ``file``)."""
         return {k: v for k, v in self.__dict__.items() if k != "_domain"}
 
     IN_CODE: ClassVar[str] = "<shape in code>"
@@ -299,7 +415,7 @@ class Geometry(Section):
             value = getattr(self, f.name)
             if isinstance(value, float) and math.isnan(value):
                 continue
-            if f.name in self.OCC_KEYS and self.kind != "occ":
+            if f.name in self.kind_of.foreign_keys:
                 continue
             if f.name in ("shapes", "boundaries"):
                 value = [{g.name: plain(getattr(item, g.name)) for g in dataclasses.fields(item)

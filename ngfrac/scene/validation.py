@@ -80,7 +80,7 @@ def validate_scene(scene: "Scene") -> None:
         for point in crack.points:
             if not domain.contains(point, tol=1e-12):
                 raise SceneError(f"cracks[{i}].points: point {list(point)} lies outside the "
-                                 f"domain {_domain_text(scene)}")
+                                 f"domain {scene.geometry.describe()}")
     normals = [c.normal for c in scene.cracks] if scene.geometry.dim == 3 else []
     for problem in crack_problems(scene.geometry, [c.points for c in scene.cracks], normals):
         raise SceneError(problem)
@@ -151,29 +151,15 @@ def _check_finite_expressions(scene: "Scene") -> None:
                                  f"be finite for 0 <= t <= t_end")
 
 def _check_dimension(scene: "Scene") -> None:
-    """A 3D model needs a box (a solid), a box (a solid) needs a 3D model."""
-    kind, geometry = scene.model.kind, scene.geometry.kind
-    if geometry == "occ":
-        _check_occ_dimension(scene)
-        return
-    if kind in scene.model.KINDS_3D and scene.geometry.dim != 3:
-        raise SceneError(f"model.kind = {kind!r} is 3D but geometry.kind = {geometry!r} is 2D; "
-                         "set geometry.kind = 'box' (with depth)")
-    if kind not in scene.model.KINDS_3D and scene.geometry.dim == 3:
-        raise SceneError(f"geometry.kind = {geometry!r} is 3D but model.kind = {kind!r} is 2D; "
-                         f"set model.kind = {scene.model.KINDS_3D[0]!r}")
+    """A 3D model needs a 3D domain (a box, a solid), a 3D domain a 3D model (the geometry
+    kind words the message: :meth:`~ngfrac.scene.geometry_section.GeometryKind.dimension_problem`)."""
+    model = scene.model
+    models_2d = tuple(k for k in model.KINDS if k not in model.KINDS_3D)
+    problem = scene.geometry.kind_of.dimension_problem(scene.geometry, model.kind,
+                                                       model.KINDS_3D, models_2d)
+    if problem is not None:
+        raise SceneError(problem)
 
-def _check_occ_dimension(scene: "Scene") -> None:
-    """A CAD file or shapes of the other dimension than the model's."""
-    kind, dim = scene.model.kind, scene.geometry.dim
-    source = f"geometry.file = {scene.geometry.file!r}" if scene.geometry.file else "geometry.shapes"
-    models_2d = ", ".join(repr(k) for k in scene.model.KINDS if k not in scene.model.KINDS_3D)
-    if kind in scene.model.KINDS_3D and dim != 3:
-        raise SceneError(f"{source} is 2D (faces, no solid) but model.kind = {kind!r} is 3D; "
-                         f"give a solid or a 2D model.kind ({models_2d})")
-    if kind not in scene.model.KINDS_3D and dim == 3:
-        raise SceneError(f"{source} is 3D (a solid) but model.kind = {kind!r} is 2D; set "
-                         f"model.kind = {scene.model.KINDS_3D[0]!r} or give a planar face in z = 0")
 
 def _check_constrained(scene: "Scene") -> None:
     """Quasi-static u (alpha1 = 0) needs every component of u prescribed on some boundary;
@@ -224,11 +210,6 @@ def _check_crack_model(scene: "Scene") -> None:
         raise SceneError(f"phase_field.epsilon = {pf.epsilon!r} is not allowed: PF-CZM with "
                          f"the {pf.softening} law needs epsilon <= {limit:.4g} (g convex; "
                          "4 l_ch/(pi a1_min), l_ch = E G_f/f_t^2): lower it") from None
-
-def _domain_text(scene: "Scene") -> str:
-    if scene.geometry.kind == "occ":
-        return "(the occ shape)"
-    return " x ".join(f"[{o}, {o + e}]" for o, e in zip(scene.geometry.origin, scene.geometry.extent))
 
 def _check_gamma_positive(scene: "Scene") -> None:
     gamma = scene.material.gamma
