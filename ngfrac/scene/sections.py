@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Mapping
+from typing import TYPE_CHECKING, Any, ClassVar, Mapping
 
 from ..physics.crack_models import CRACK_MODELS, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
 from ..physics.loads import LOAD_KINDS  # noqa: F401 (re-exported: the values of loads[i].kind)
+from .build import build_crack_model, build_elastic_model
 from .coercion import (FREE, REQUIRED, Components, SceneError, Section,  # noqa: F401 (re-exported)
                        build_section, dotted_key, require, unknown_key_message)
 from .expressions import Expression
@@ -28,6 +30,10 @@ from .geometry_section import (SHAPE_TYPES_2D, SHAPE_TYPES_3D, BoundarySelector,
                                Crack, Geometry, Shape, occ_domain_of)
 from .units import SCENE_UNITS
 from .validation import validate_scene
+
+if TYPE_CHECKING:
+    from ..physics.crack_models import CrackModel
+    from ..physics.elastic import ElasticModel
 
 MODELS = tuple(ELASTIC_MODELS)
 """Model names a scene may choose (``model.kind``)."""
@@ -509,6 +515,25 @@ class Scene:
                 built.append(item)
             if not isinstance(items, tuple) or any(a is not b for a, b in zip(built, items)):
                 object.__setattr__(self, section, tuple(built))
+
+    BUILT: ClassVar[tuple[str, ...]] = ("elastic_model", "crack_model")
+    """What a scene builds once and keeps (copies and pickles leave it out)."""
+
+    @functools.cached_property
+    def elastic_model(self) -> "ElasticModel":
+        """The elastic model of ``model.kind``, built once per scene
+        (:func:`ngfrac.scene.build.build_elastic_model`): every part of a run asks this one."""
+        return build_elastic_model(self)
+
+    @functools.cached_property
+    def crack_model(self) -> "CrackModel":
+        """The crack model of ``phase_field.model``, built once per scene
+        (:func:`ngfrac.scene.build.build_crack_model`): every part of a run asks this one."""
+        return build_crack_model(self)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Copies and pickles leave out the built models; the copy builds its own."""
+        return {k: v for k, v in self.__dict__.items() if k not in self.BUILT}
 
     @property
     def mesh_size(self) -> float:
