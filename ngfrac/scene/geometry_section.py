@@ -312,8 +312,6 @@ class Geometry(Section):
     """
 
     SECTION: ClassVar[str] = "geometry"
-    KINDS: ClassVar[tuple[str, ...]] = tuple(GEOMETRY_KINDS)
-    """The values of ``kind``: the keys of :data:`GEOMETRY_KINDS`."""
     OCC_KEYS: ClassVar[tuple[str, ...]] = OCC_KEYS
     BOUNDARIES: ClassVar[tuple[str, ...]] = ("bottom", "right", "top", "left")
     BOUNDARIES_3D: ClassVar[tuple[str, ...]] = ("left", "right", "bottom", "top", "back", "front")
