@@ -54,7 +54,9 @@ class Model(Section):
 
     SECTION: ClassVar[str] = "model"
     KINDS: ClassVar[tuple[str, ...]] = MODELS
+    """The values of ``kind`` (:data:`MODELS`); the cross-section checks read them here."""
     KINDS_3D: ClassVar[tuple[str, ...]] = MODELS_3D
+    """The 3D ones (:data:`MODELS_3D`)."""
     kind: str = "mode3"
 
     def validate(self) -> None:

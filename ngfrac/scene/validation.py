@@ -150,6 +150,7 @@ def _check_finite_expressions(scene: "Scene") -> None:
                 raise SceneError(f"{name} = {part.text!r} is {bad} {place}: an expression must "
                                  f"be finite for 0 <= t <= t_end")
 
+
 def _check_dimension(scene: "Scene") -> None:
     """A 3D model needs a 3D domain (a box, a solid), a 3D domain a 3D model (the geometry
     kind words the message: :meth:`~ngfrac.scene.geometry_section.GeometryKind.dimension_problem`)."""
@@ -174,15 +175,18 @@ def _check_constrained(scene: "Scene") -> None:
                              f"load leaves it 'free'), so with phase_field.alpha1 = 0 the "
                              "u-problem is singular; prescribe it on one boundary")
 
+
 def _check_split(scene: "Scene") -> None:
     """A split (ngfrac.physics.splits) and a crack pressure need a vector model."""
     split, kind = scene.material.split, scene.model.kind
-    if scene.phase_field.pressurized and kind == "mode3":
+    scalar = scene.model.n_components == 1  # mode III
+    if scene.phase_field.pressurized and scalar:
         raise SceneError(f"phase_field.crack_pressure = {scene.phase_field.crack_pressure.text!r} "
                          "needs a plane or 3D model: mode III has no opening")
-    if split != "none" and kind == "mode3":
+    if split != "none" and scalar:
         raise SceneError(f"material.split = {split!r} needs a plane or 3D model, but "
-                         "model.kind = 'mode3' has no tension or compression: set split = 'none'")
+                         f"model.kind = {kind!r} has no tension or compression: set split = 'none'")
+
 
 def _check_crack_model(scene: "Scene") -> None:
     """PF-CZM needs a strength, a constant toughness and eps below its limit; the Rankine
@@ -210,6 +214,7 @@ def _check_crack_model(scene: "Scene") -> None:
         raise SceneError(f"phase_field.epsilon = {pf.epsilon!r} is not allowed: PF-CZM with "
                          f"the {pf.softening} law needs epsilon <= {limit:.4g} (g convex; "
                          "4 l_ch/(pi a1_min), l_ch = E G_f/f_t^2): lower it") from None
+
 
 def _check_gamma_positive(scene: "Scene") -> None:
     gamma = scene.material.gamma
