@@ -1,11 +1,17 @@
-"""The seam between one process and many: what the stepper, its sub-problems and the writers
-ask of the processes of a run (:class:`Communicator`), and the one-process answer
-(:class:`Serial`, :data:`SERIAL`). The MPI answer is :class:`ngfrac.parallel.MPICommunicator`.
+"""The seam between one process and many: what the stepper, its sub-problems, the writers and
+the run (:mod:`ngfrac.runner`) ask of the processes of a run (:class:`Communicator`), and the
+one-process answer (:class:`Serial`, :data:`SERIAL`). The MPI answer is
+:class:`ngfrac.parallel.MPICommunicator`.
+
+What the run asks (its folder, its restart, its writers) is built from layers above this one
+(``ngfrac.io``), so those methods take it as arguments: the serial answer calls what it is
+given, the MPI answer (in ``ngfrac.parallel``, which may import io) builds its own.
 """
 from __future__ import annotations
 
 import contextlib
-from typing import TYPE_CHECKING, Any, Callable, Protocol
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence, TypeVar
 
 import ngsolve as ngs
 
@@ -20,6 +26,8 @@ if TYPE_CHECKING:
     from .stepper import PhaseFieldStepper
 
 __all__ = ["SERIAL", "Communicator", "ParallelError", "Serial"]
+
+T = TypeVar("T")
 
 
 class ParallelError(RuntimeError):
@@ -48,6 +56,12 @@ class Communicator(Protocol):
     def broadcast(self, value: Any) -> Any: ...
     def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any: ...
     def barrier(self) -> None: ...
+    # -- the run (ngfrac.runner): rank rules of its folder, restart and writers
+    def on_root(self, make: Callable[[], T]) -> T | None: ...
+    def read_on_root(self, read: Callable[[], T]) -> T | None: ...
+    def resume(self, checkpoint: Any, scene: "Scene") -> "PhaseFieldStepper": ...
+    def run_writers(self, default: Callable[[], list[Any]], folder: Any, out: Path,
+                    scene: "Scene", extra: Sequence[Any], restart: bool) -> list[Any]: ...
 
 
 class Serial:
@@ -114,6 +128,25 @@ class Serial:
 
     def barrier(self) -> None:
         """Nothing to wait for."""
+
+    def on_root(self, make: Callable[[], T]) -> T:
+        """``make()``: the one process is rank 0 (what only rank 0 does, e.g. the run folder)."""
+        return make()
+
+    def read_on_root(self, read: Callable[[], T]) -> T:
+        """``read()``; its errors propagate as they are."""
+        return read()
+
+    def resume(self, checkpoint: Any, scene: "Scene") -> "PhaseFieldStepper":
+        """The stepper a checkpoint continues
+        (:meth:`ngfrac.io.checkpoint.CheckpointState.resume`)."""
+        return checkpoint.resume(scene)
+
+    def run_writers(self, default: Callable[[], list[Any]], folder: Any, out: Path,
+                    scene: "Scene", extra: Sequence[Any], restart: bool) -> list[Any]:
+        """The run's writers: ``default()`` (:func:`ngfrac.io.writers.default_writers` of
+        the folder) and then ``extra``."""
+        return [*default(), *extra]
 
 
 SERIAL = Serial()
