@@ -304,17 +304,13 @@ class VTKSnapshots(Writer):
             write_snapshot(self.series, stepper)
 
     def _resume(self, stepper: "PhaseFieldStepper") -> None:
-        """The kept snapshots; in an MPI job rank 0 rewrites the series, the other ranks
-        read it afterwards (each names its parts of the next snapshot by the count)."""
-        comm = stepper.mesh.comm
-        if comm.size == 1:
-            self.series.resume(stepper.t)
-            return
-        if comm.rank == 0:
-            self.series.resume(stepper.t)
-        comm.Barrier()
-        if comm.rank != 0:
-            self.series.resume(stepper.t, write=False)
+        """The kept snapshots: rank 0 rewrites the series (``stepper.comm.on_root``), then
+        every rank reads it, so each rank of an MPI job names its part of the next snapshot
+        by the count (on rank 0 the reading finds what it wrote)."""
+        comm = stepper.comm
+        comm.on_root(lambda: self.series.resume(stepper.t))
+        comm.barrier()
+        self.series.resume(stepper.t, write=False)
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if snapshot_due(stepper):
