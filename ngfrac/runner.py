@@ -32,7 +32,7 @@ from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json,
                         to_toml, write_run_json)
 from .io.writers import (CHECKPOINT, PLOTS, RunFolder, VTKSnapshots, Writer, Writers,  # noqa: F401
                          default_writers, run_info, write_crack_path, write_plots,
-                         write_snapshot)  # the last five named from here by scripts and tests
+                         write_snapshot)  # PLOTS ... write_snapshot: importable from here, as before
 from .parallel.communicator import world
 from .solve.communicator import SERIAL, Communicator, ParallelError
 from .scene import Scene
