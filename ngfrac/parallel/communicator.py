@@ -44,6 +44,8 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from ..solve.crack_tracking import CrackTracker
     from ..mesh.fields import MeshFields
+    from ..solve.z_system import ZForms
+    from .z_system import DistributedSystem
 
 __all__ = ["MPICommunicator", "launched_rank", "launched_size", "world"]
 # SERIAL, Communicator, ParallelError and Serial are ngfrac.solve.communicator's (imported here
@@ -209,13 +211,13 @@ class MPICommunicator:
         """Rank 0's ``value`` on every rank. Collective."""
         return self.comm.bcast(value, root=0)
 
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any:
-        """The z-system of a distributed mesh: ``integrand`` as one form with this
+    def z_system(self, forms: "ZForms") -> "DistributedSystem":
+        """The z-system of a distributed mesh: the whole matrix as one form with this
         communicator's preconditioner, solved by CG
         (:class:`~ngfrac.parallel.z_system.DistributedSystem`)."""
         from .z_system import DistributedSystem
 
-        return DistributedSystem(fes, integrand, self.z_preconditioner)
+        return DistributedSystem(forms, self.z_preconditioner)
 
     def barrier(self) -> None:
         """Wait for every rank."""

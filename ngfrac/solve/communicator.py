@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from .crack_tracking import CrackTracker
     from .state import StepperState
     from .stepper import PhaseFieldStepper
+    from .z_system import AssembledSystem, ZForms, ZSystem
 
 __all__ = ["SERIAL", "Communicator", "ParallelError", "Serial"]
 
@@ -54,7 +55,7 @@ class Communicator(Protocol):
     def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState | None": ...
     def gather_view(self, stepper: "PhaseFieldStepper") -> Any: ...
     def broadcast(self, value: Any) -> Any: ...
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any: ...
+    def z_system(self, forms: "ZForms") -> "ZSystem": ...
     def barrier(self) -> None: ...
     # -- the run (ngfrac.runner): rank rules of its folder, restart and writers
     def on_root(self, make: Callable[[], T]) -> T | None: ...
@@ -121,10 +122,13 @@ class Serial:
         """``value`` (rank 0's, on every rank)."""
         return value
 
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> None:
-        """None: on one process the z-problem assembles K, M and the drive apart and
-        factorizes (:mod:`ngfrac.solve.z_problem`)."""
-        return None
+    def z_system(self, forms: "ZForms") -> "AssembledSystem":
+        """The z-system of one process: K, M and the drive assembled apart, a direct solve
+        (factorized once, updated per step), CG or the obstacle problem
+        (:class:`~ngfrac.solve.z_system.AssembledSystem`)."""
+        from .z_system import AssembledSystem
+
+        return AssembledSystem(forms)
 
     def barrier(self) -> None:
         """Nothing to wait for."""
