@@ -149,6 +149,19 @@ class MPICommunicator:
             log.warning("discretization.order = 1 under MPI: BDDC of P1 is one central direct "
                         "solve (no parallel speed-up); order >= 2 scales")
 
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None:
+        """Refuse a given mesh or a state not on a mesh distributed over this communicator:
+        the mesh of an MPI run is made on rank 0 from the scene or a checkpoint."""
+        if mesh is not None or state is not None and state.mesh.comm.size != self.size:
+            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene or a "
+                                "checkpoint; a given mesh or serial state is not supported: "
+                                "use ngfrac.parallel.checkpoints.resume_distributed")
+
+    def concurrent_substeps(self, requested: bool) -> bool:
+        """False: the sub-steps run one after the other on a distributed mesh (each one's
+        collective operations must come in the same order on every rank)."""
+        return False
+
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
         """``build()`` on rank 0 (it keeps the whole mesh for the crack set), distributed."""
         import netgen.meshing

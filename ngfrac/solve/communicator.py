@@ -44,6 +44,8 @@ class Communicator(Protocol):
     distributed: bool
 
     def check(self, scene: "Scene") -> None: ...
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None: ...
+    def concurrent_substeps(self, requested: bool) -> bool: ...
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
     def u_solver(self, solver: str) -> str: ...
     def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter": ...
@@ -75,6 +77,14 @@ class Serial:
 
     def check(self, scene: "Scene") -> None:
         """Nothing to refuse: every scene runs on one process."""
+
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None:
+        """Nothing to refuse: a stepper on one process starts from any given mesh or state."""
+
+    def concurrent_substeps(self, requested: bool) -> bool:
+        """``requested`` (``discretization.concurrent_substeps``): the u- and the z-sub-step
+        may run at the same time."""
+        return requested
 
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
         """The mesh ``build()`` makes."""

@@ -3,11 +3,12 @@ every question of it (the MPI one is checked by its class: making one needs mpir
 from __future__ import annotations
 
 import inspect
+from types import SimpleNamespace
 
 import pytest
 
 from ngfrac.parallel.communicator import MPICommunicator
-from ngfrac.solve.communicator import SERIAL, Communicator, Serial
+from ngfrac.solve.communicator import SERIAL, Communicator, ParallelError, Serial
 
 
 def protocol_methods() -> set[str]:
@@ -44,3 +45,22 @@ def test_serial_resume_is_the_checkpoints_own():
             return ("stepper of", scene)
 
     assert SERIAL.resume(Stored(), "scene") == ("stepper of", "scene")
+
+
+def test_serial_starts_from_anything_and_lets_the_substeps_run_concurrently():
+    SERIAL.check_start("a mesh", "a state")  # accepts any given mesh or state
+    assert SERIAL.concurrent_substeps(True) and not SERIAL.concurrent_substeps(False)
+
+
+def test_an_mpi_start_refuses_a_given_mesh_or_a_serial_state_in_one_line():
+    class State:
+        class mesh:
+            class comm:
+                size = 1
+
+    job = SimpleNamespace(size=3)  # MPICommunicator's answers read only its size here
+    for mesh, state in [("a mesh", None), (None, State())]:
+        with pytest.raises(ParallelError, match="a given mesh or serial state is not supported"):
+            MPICommunicator.check_start(job, mesh, state)
+    MPICommunicator.check_start(job, None, None)
+    assert MPICommunicator.concurrent_substeps(job, True) is False
