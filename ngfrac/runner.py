@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .environment import set_threads
-from .io.checkpoint import CheckpointState, load_checkpoint
+from .io.checkpoint import CheckpointError, CheckpointState, load_checkpoint
 from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
                         to_toml, write_run_json)
 from .io.writers import (CHECKPOINT, PLOTS, RunFolder, VTKSnapshots, Writer, Writers,  # noqa: F401
@@ -39,7 +39,7 @@ from .scene import Scene
 from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["RunSummary", "open_run", "record_restart", "run_scene"]
+__all__ = ["RunSummary", "exit_code", "open_run", "record_restart", "run_scene"]
 
 log = logging.getLogger(__name__)
 
@@ -220,21 +220,26 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     started = time.perf_counter()
     # before the guard: a missing or foreign checkpoint is an error alike on every rank
     checkpoint = _read_checkpoint(Path(out_dir), scene, comm) if restart else None
-    with comm.guard(_exit_code):
+    with comm.guard(exit_code):
         return _run(scene, Path(out_dir), overwrite, on_record, plots, on_step, restart,
                     on_start, writers, comm, checkpoint, started)
 
 
-def _exit_code(error: BaseException) -> int:
-    """The exit status of ``ngfrac run`` for an error (an MPI job ends with it)."""
+def exit_code(error: BaseException) -> int:
+    """The exit status of ``ngfrac run`` for an error (an MPI job ends with it): those of
+    :func:`ngfrac.cli.main` for one process, 2 for bad input (a scene, an output folder, a
+    checkpoint or results file, an MPI launch), 3 for a meshing or solver failure, 130 for an
+    interrupt; 1 for any other error."""
     from .geometry.domains import MeshingError
+    from .io.hdf5 import ResultsError
     from .solve.u_problem import SolverError
 
     if isinstance(error, (SolverError, MeshingError)):
         return 3
     if isinstance(error, KeyboardInterrupt):
         return 130
-    return 2 if isinstance(error, (ValueError, OutputError, ParallelError)) else 1
+    bad_input = (ValueError, OutputError, CheckpointError, ResultsError, ParallelError)
+    return 2 if isinstance(error, bad_input) else 1
 
 
 def _run(scene: Scene, out_dir: Path, overwrite: bool,
