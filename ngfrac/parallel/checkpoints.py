@@ -53,13 +53,12 @@ def gather_view(stepper: "PhaseFieldStepper") -> RootView | None:
 
 def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:
     """The stepper's state on rank 0's serial mesh (:meth:`PhaseFieldStepper.state` with u,
-    u_prev and z gathered dof by dof); None on the other ranks. Collective.
-
-    On one process the stepper's own :meth:`~PhaseFieldStepper.state`.
+    u_prev and z gathered dof by dof); None on the other ranks. Collective
+    (:meth:`MPICommunicator.gather_state <ngfrac.parallel.MPICommunicator.gather_state>`; on
+    one process :meth:`Serial.gather_state <ngfrac.solve.communicator.Serial.gather_state>`
+    is the stepper's own :meth:`~PhaseFieldStepper.state`).
     """
     comm = stepper.comm
-    if not comm.distributed:
-        return stepper.state()
     serial = comm.root_copy(stepper.scene).gather(stepper.fields, STATE_FIELDS)
     state = stepper.state()  # counters, crack tracking, adapter: the same on every rank
     if not comm.is_root:

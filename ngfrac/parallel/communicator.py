@@ -99,8 +99,6 @@ class MPICommunicator:
         Of the z-CG: ``"local"`` (Jacobi, the default) or ``"bddc"``.
     """
 
-    distributed = True
-
     def __init__(self, comm: Any = None, z_preconditioner: str = "local") -> None:
         from mpi4py import MPI  # before NGSolve first meets a communicator (it loads its wrapper)
 

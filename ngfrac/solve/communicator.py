@@ -41,7 +41,6 @@ class Communicator(Protocol):
     size: int
     rank: int
     is_root: bool
-    distributed: bool
 
     def check(self, scene: "Scene") -> None: ...
     def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None: ...
@@ -73,7 +72,6 @@ class Serial:
     size = 1
     rank = 0
     is_root = True
-    distributed = False
 
     def check(self, scene: "Scene") -> None:
         """Nothing to refuse: every scene runs on one process."""
