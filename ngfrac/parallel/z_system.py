@@ -16,8 +16,10 @@ __all__ = ["DistributedSystem"]
 
 class DistributedSystem:
     """The z-system of a distributed mesh: K + (alpha2/dt) M + D(W) as one form and its
-    right-hand side as one linear form, both assembled every step, the form with its parallel
-    preconditioner registered, solved by CG from z_old.
+    right-hand side as one linear form
+    (:meth:`~ngfrac.solve.z_system.ZForms.matrix_integrand`,
+    :meth:`~ngfrac.solve.z_system.ZForms.rhs_integrand`), both assembled every step, the form
+    with its parallel preconditioner registered, solved by CG from z_old.
 
     Distributed matrices have no ``AsVector`` (the serial path adds K and M to D's values),
     no ``CreateSmoother`` and no direct solve in the pip wheel. The z-update is the projection
@@ -32,21 +34,12 @@ class DistributedSystem:
     """
 
     def __init__(self, forms: ZForms, preconditioner: str) -> None:
-        fields, model, gamma, eps = forms.fields, forms.crack_model, forms.gamma, forms.epsilon
+        fields = forms.fields
         self.fields, self.context = fields, forms.context
         zt, w = fields.fes_z.TnT()
-        dx, inv_dt, implicit = fields.dx, forms.context.inv_dt, forms.implicit
-        explicit = implicit if forms.explicit is None else forms.explicit
-        rhs = (forms.alpha2 * inv_dt * fields.z + explicit) * w
-        explicit_concave = model.concave(fields.z, w, gamma, eps)
-        if explicit_concave is not None:
-            rhs = rhs - explicit_concave
-        for part in (model.source(w, gamma, eps), forms.pressure(w)):
-            rhs = rhs if part is None else rhs + part
-        self._rhs_form = ngs.LinearForm(rhs * dx)
+        self._rhs_form = ngs.LinearForm(forms.rhs_integrand(w) * fields.dx)
         self.form = ngs.BilinearForm(fields.fes_z, symmetric=True)
-        self.form += (model.stiffness(zt, w, gamma, eps)
-                      + forms.alpha2 * inv_dt * zt * w + implicit * zt * w) * dx
+        self.form += forms.matrix_integrand(zt, w) * fields.dx
         self.kind = preconditioner
         self.preconditioner = ngs.Preconditioner(self.form, preconditioner)
         self.rhs = fields.z.vec.CreateVector()

@@ -93,6 +93,26 @@ class ZForms:
             return None
         return -self.crack_pressure * ngs.InnerProduct(self.u_drive, ngs.grad(w))
 
+    def matrix_integrand(self, zt: Any, w: Any) -> ngs.CoefficientFunction:
+        """K + (alpha2/dt) M + D(W) as one integrand of the trial and test functions, for a
+        form assembled whole (a distributed mesh's)."""
+        return (self.crack_model.stiffness(zt, w, self.gamma, self.epsilon)
+                + self.alpha2 * self.context.inv_dt * zt * w + self.implicit * zt * w)
+
+    def rhs_integrand(self, w: Any) -> ngs.CoefficientFunction:
+        """(alpha2/dt z_old + W) w - C(z_old, w) + source + the pressure's term as one
+        integrand of the test function, for a linear form assembled whole (a distributed
+        mesh's)."""
+        z_old, model = self.fields.z, self.crack_model
+        explicit = self.implicit if self.explicit is None else self.explicit
+        rhs = (self.alpha2 * self.context.inv_dt * z_old + explicit) * w
+        concave = model.concave(z_old, w, self.gamma, self.epsilon)
+        if concave is not None:
+            rhs = rhs - concave
+        for part in (model.source(w, self.gamma, self.epsilon), self.pressure(w)):
+            rhs = rhs if part is None else rhs + part
+        return rhs
+
 
 class ZSystem(Protocol):
     """What the z-problem asks of its communicator's z-system."""
