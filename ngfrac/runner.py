@@ -27,19 +27,19 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from .environment import set_threads
-from .io.checkpoint import CheckpointState, resume
+from .io.checkpoint import CheckpointError, CheckpointState, load_checkpoint
 from .io.output import (Manifest, OutputError, atomic_write_text, read_run_json, run_metadata,
                         to_toml, write_run_json)
-from .io.writers import (CHECKPOINT, PLOTS, Checkpoints, GatheredResults, HistoryCSV,
-                         RunFolder, VTKSnapshots, Writer, Writers, default_writers, run_info,
-                         write_crack_path, write_plots, write_snapshot)
+from .io.writers import (CHECKPOINT, PLOTS, RunFolder, VTKSnapshots, Writer, Writers,  # noqa: F401
+                         default_writers, run_info, write_crack_path, write_plots,
+                         write_snapshot)  # PLOTS ... write_snapshot: importable from here, as before
 from .parallel.communicator import world
 from .solve.communicator import SERIAL, Communicator, ParallelError
 from .scene import Scene
 from .mesh.resolution import ResolutionWarning, resolution_warnings
 from .solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["RunSummary", "open_run", "record_restart", "run_scene"]
+__all__ = ["RunSummary", "exit_code", "open_run", "record_restart", "run_scene"]
 
 log = logging.getLogger(__name__)
 
@@ -62,39 +62,34 @@ def open_run(scene: Scene, out: Path, overwrite: bool = False,
     <ngfrac.io.writers.RunFolder.create>`) or of a restart from the folder's checkpoint
     (its scene and the restart recorded by :func:`record_restart`).
 
-    In an MPI job (``comm``) only rank 0 has the folder (None on the others); a restart reads
-    the serial checkpoint on rank 0, distributes its mesh and scatters its fields
-    (:func:`ngfrac.parallel.checkpoints.resume_distributed`); rank 0 alone updates the folder.
-    Collective in an MPI job.
+    The communicator says what each process does: the folder is rank 0's (``comm.on_root``;
+    None on the other ranks of an MPI job), the checkpoint is read on rank 0
+    (``comm.read_on_root``) and continued by ``comm.resume`` (in an MPI job
+    :func:`ngfrac.parallel.checkpoints.resume_distributed` distributes its mesh and scatters
+    its fields). Collective in an MPI job.
     """
-    checkpoint = None
-    if restart and comm.distributed:
-        checkpoint = _checkpoint_on_root(out / CHECKPOINT, scene, comm)
+    checkpoint = _read_checkpoint(out, scene, comm) if restart else None
     return _open(scene, out, overwrite, restart, comm, checkpoint)
 
 
 def _open(scene: Scene, out: Path, overwrite: bool, restart: bool, comm: Communicator,
           checkpoint: CheckpointState | None) -> tuple[PhaseFieldStepper, RunFolder | None]:
-    """:func:`open_run` with an MPI restart's checkpoint read (by :func:`_checkpoint_on_root`)."""
+    """:func:`open_run` with a restart's checkpoint read (by :func:`_read_checkpoint`)."""
     if not restart:
-        folder = RunFolder.create(out, scene, overwrite) if comm.is_root else None
+        folder = comm.on_root(lambda: RunFolder.create(out, scene, overwrite))
         return PhaseFieldStepper(scene, comm=comm), folder
-    path = out / CHECKPOINT
-    if comm.distributed:
-        from .parallel.checkpoints import resume_distributed
+    stepper = comm.resume(checkpoint, scene)
+    return stepper, comm.on_root(lambda: _continued_folder(out, scene, stepper, overwrite))
 
-        stepper = resume_distributed(checkpoint, scene, comm)
-        if not comm.is_root:
-            return stepper, None
-    else:
-        if not path.exists():
-            raise OutputError(_no_checkpoint(out))
-        stepper = resume(path, scene)
+
+def _continued_folder(out: Path, scene: Scene, stepper: PhaseFieldStepper,
+                      overwrite: bool) -> RunFolder:
+    """The folder of a restart: its CAD copy checked, its manifest, the restart recorded."""
     _check_cad_copy(out)
     manifest = Manifest.load(out) or Manifest.adopt(out)
     manifest.save()
     info = record_restart(out, scene, stepper, manifest)
-    return stepper, RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
+    return RunFolder(out, manifest, info, restart=True, overwrite=overwrite)
 
 
 def _check_cad_copy(out: Path) -> None:
@@ -118,14 +113,17 @@ def _no_checkpoint(out: Path) -> str:
             "(written every output.checkpoint_every steps)")
 
 
-def _checkpoint_on_root(path: Path, scene: Scene, comm: Communicator) -> CheckpointState | None:
-    """The checkpoint read on rank 0 of an MPI job; a missing or unusable one raises the
-    same error on every rank (one line from rank 0, no Abort)."""
-    from .parallel.checkpoints import load_on_root
+def _read_checkpoint(out: Path, scene: Scene, comm: Communicator) -> CheckpointState | None:
+    """The folder's checkpoint, read on rank 0 (None on the other ranks of an MPI job); a
+    missing or unusable one raises the same error on every rank (one line from rank 0, no
+    Abort)."""
+    def read() -> CheckpointState:
+        path = out / CHECKPOINT
+        if not path.exists():
+            raise OutputError(_no_checkpoint(out))
+        return load_checkpoint(path, scene)
 
-    if not comm.broadcast(path.exists() if comm.is_root else None):
-        raise OutputError(_no_checkpoint(path.parent))
-    return load_on_root(path, scene, comm)
+    return comm.read_on_root(read)
 
 
 def _flat_keys(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -219,61 +217,51 @@ def run_scene(scene: Scene, out_dir: str | Path, overwrite: bool = False,
     set_threads()
     comm = world() if comm is None else comm
     comm.check(scene)  # the same on every rank: refused before anything is written
-    checkpoint = None
-    if restart and comm.distributed:  # a missing or foreign checkpoint: alike on every rank
-        checkpoint = _checkpoint_on_root(Path(out_dir) / CHECKPOINT, scene, comm)
-    with comm.guard(_exit_code):
+    started = time.perf_counter()
+    # before the guard: a missing or foreign checkpoint is an error alike on every rank
+    checkpoint = _read_checkpoint(Path(out_dir), scene, comm) if restart else None
+    with comm.guard(exit_code):
         return _run(scene, Path(out_dir), overwrite, on_record, plots, on_step, restart,
-                    on_start, writers, comm, checkpoint)
+                    on_start, writers, comm, checkpoint, started)
 
 
-def _exit_code(error: BaseException) -> int:
-    """The exit status of ``ngfrac run`` for an error (an MPI job ends with it)."""
+def exit_code(error: BaseException) -> int:
+    """The exit status of ``ngfrac run`` for an error (an MPI job ends with it): those of
+    :func:`ngfrac.cli.main` for one process, 2 for bad input (a scene, an output folder, a
+    checkpoint or results file, an MPI launch), 3 for a meshing or solver failure, 130 for an
+    interrupt; 1 for any other error."""
     from .geometry.domains import MeshingError
+    from .io.hdf5 import ResultsError
     from .solve.u_problem import SolverError
 
     if isinstance(error, (SolverError, MeshingError)):
         return 3
     if isinstance(error, KeyboardInterrupt):
         return 130
-    return 2 if isinstance(error, (ValueError, OutputError, ParallelError)) else 1
-
-
-def _mpi_writers(folder: RunFolder | None, out_dir: Path, scene: Scene, comm: Communicator,
-                 writers: Sequence[Writer], restart: bool) -> list[Writer]:
-    """The writers of an MPI run: history.csv and the given ones on rank 0; on every rank
-    the VTK series (a part per rank, listed by rank 0), the checkpoints and results.h5 with
-    crack_path.csv (gathered to rank 0, which writes them)."""
-    if not comm.is_root:
-        vtk = VTKSnapshots(RunFolder(out_dir, None, restart=restart), scene)  # type: ignore[arg-type]
-        comm.barrier()  # rank 0 has made vtk/
-        return [vtk, Checkpoints(None, scene), GatheredResults(None, scene, restart)]
-    log.info("under MPI ngfrac writes no plots and no opening.csv (docs/parallel.md)")
-    vtk = VTKSnapshots(folder, scene)
-    comm.barrier()
-    return [HistoryCSV(folder), vtk, Checkpoints(folder, scene),
-            GatheredResults(folder, scene, restart), *writers]
+    bad_input = (ValueError, OutputError, CheckpointError, ResultsError, ParallelError)
+    return 2 if isinstance(error, bad_input) else 1
 
 
 def _run(scene: Scene, out_dir: Path, overwrite: bool,
          on_record: Callable[[StepRecord], None] | None, plots: bool,
          on_step: Callable[[PhaseFieldStepper], None] | None, restart: bool,
          on_start: Callable[[PhaseFieldStepper], None] | None, writers: Sequence[Writer],
-         comm: Communicator, checkpoint: CheckpointState | None = None) -> RunSummary:
-    """:func:`run_scene` after its checks."""
-    started = time.perf_counter()
+         comm: Communicator, checkpoint: CheckpointState | None,
+         started: float) -> RunSummary:
+    """:func:`run_scene` after its checks (``started``: its clock, before the checkpoint was
+    read)."""
     stepper, folder = _open(scene, out_dir, overwrite, restart, comm, checkpoint)
     stepper.timer.add("set-up (mesh, spaces, z0, u0)", time.perf_counter() - started)
     if on_start is not None:
         on_start(stepper)
-    if comm.distributed:
-        defaults, writers = _mpi_writers(folder, out_dir, scene, comm, writers, restart), ()
-    else:
-        defaults = default_writers(folder, scene, plots)
+    # this rank's writers: default_writers on one process (then the given ones); in an MPI
+    # job those of ngfrac.parallel.writers.rank_writers (the given ones on rank 0)
+    writers = comm.run_writers(lambda: default_writers(folder, scene, plots), folder, out_dir,
+                               scene, writers, restart)
     record = stepper.record()
     if on_step is not None:
         on_step(stepper)
-    with Writers([*defaults, *writers]) as all_writers:
+    with Writers(writers) as all_writers:
         all_writers.start(stepper, record)
         for record in stepper.run():
             all_writers.record(stepper, record)
@@ -284,6 +272,6 @@ def _run(scene: Scene, out_dir: Path, overwrite: bool,
         all_writers.finish(stepper)
     log.info("run %s finished at t=%g in %.1f s", scene.name, record.t, record.wall_s)
     wall = time.perf_counter() - started
-    snapshots = next((w.n_snapshots for w in defaults if isinstance(w, VTKSnapshots)), 0)
+    snapshots = next((w.n_snapshots for w in writers if isinstance(w, VTKSnapshots)), 0)
     return RunSummary(out_dir if folder is None else folder.path, record, snapshots,
                       stepper.timer.table(total=wall))

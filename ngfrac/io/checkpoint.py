@@ -96,6 +96,16 @@ class CheckpointState:
         return StepperState(self.k, self.ticks, self.level, mesh, fields, self.nucleus,
                             self.previous_tip, adapter)
 
+    def resume(self, scene: Scene) -> "PhaseFieldStepper":
+        """A stepper of ``scene`` continuing from this checkpoint on one process (no initial
+        solve); a state the scene cannot continue raises :class:`CheckpointError`."""
+        from ..solve.stepper import PhaseFieldStepper
+
+        try:
+            return PhaseFieldStepper.from_state(scene, self.stepper_state())
+        except ValueError as err:
+            raise CheckpointError(f"checkpoint {str(self.path)!r}: {err}") from None
+
 
 # -- writing ----------------------------------------------------------------------------------
 def save_checkpoint(stepper: "PhaseFieldStepper", path: str | Path) -> Path:
@@ -248,14 +258,9 @@ def restore(stepper: "PhaseFieldStepper", state: CheckpointState) -> None:
 
 
 def resume(path: str | Path, scene: Scene) -> "PhaseFieldStepper":
-    """A stepper of ``scene`` continuing from the checkpoint at ``path`` (no initial solve)."""
-    from ..solve.stepper import PhaseFieldStepper
-
-    state = load_checkpoint(path, scene)
-    try:
-        return PhaseFieldStepper.from_state(scene, state.stepper_state())
-    except ValueError as err:
-        raise CheckpointError(f"checkpoint {str(path)!r}: {err}") from None
+    """A stepper of ``scene`` continuing from the checkpoint at ``path`` (no initial solve;
+    :meth:`CheckpointState.resume`)."""
+    return load_checkpoint(path, scene).resume(scene)
 
 
 __all__ = ["IGNORED_KEYS", "CheckpointError", "CheckpointState", "load_checkpoint", "restore",

@@ -327,8 +327,8 @@ class VTKSeries:
 
     def resume(self, t: float, write: bool = True) -> None:
         """Keep the snapshots of an earlier run up to time ``t`` (for a restart); ``write``:
-        rewrite the collection (False on the ranks of an MPI job other than 0, which only
-        need the count for the next file names)."""
+        rewrite the collection (False: only read it, for the count that names the next files,
+        as every rank of an MPI job does after rank 0 rewrote it)."""
         import re
 
         collection = self.folder / f"{self.stem}.pvd"

@@ -43,8 +43,7 @@ from ..mesh.resolution import resolution_warnings
 if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper, StepRecord
 
-__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "GatheredResults", "HistoryCSV",
-           "OpeningCSV",
+__all__ = ["CHECKPOINT", "PLOTS", "Checkpoints", "CrackPathCSV", "HistoryCSV", "OpeningCSV",
            "Plots", "Progress", "ResultsH5", "RunFolder", "VTKSnapshots", "Writer", "Writers",
            "default_writers", "run_info", "snapshot_due", "write_crack_path", "write_opening",
            "write_plots", "write_snapshot"]
@@ -229,6 +228,18 @@ class ResultsH5(Writer):
         self.path = folder.path / "results.h5"
         self.writer: ResultsWriter | None = None
 
+    @classmethod
+    def for_folder(cls, folder: RunFolder, scene: Scene) -> "ResultsH5 | None":
+        """The results.h5 writer when ``output.results`` (none for a restart of a folder
+        without results.h5, e.g. of a distributed run before ngfrac wrote one there: a
+        warning)."""
+        if not scene.output.results:
+            return None
+        if folder.restart and not (folder.path / "results.h5").exists():
+            log.warning("no results.h5 in %s to continue; the restart writes none", folder.path)
+            return None
+        return cls(folder, scene)
+
     def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         folder = self.folder
         with folder.manifest.writing("results.h5", "results.xdmf"):
@@ -293,17 +304,13 @@ class VTKSnapshots(Writer):
             write_snapshot(self.series, stepper)
 
     def _resume(self, stepper: "PhaseFieldStepper") -> None:
-        """The kept snapshots; in an MPI job rank 0 rewrites the series, the other ranks
-        read it afterwards (each names its parts of the next snapshot by the count)."""
-        comm = stepper.mesh.comm
-        if comm.size == 1:
-            self.series.resume(stepper.t)
-            return
-        if comm.rank == 0:
-            self.series.resume(stepper.t)
-        comm.Barrier()
-        if comm.rank != 0:
-            self.series.resume(stepper.t, write=False)
+        """The kept snapshots: rank 0 rewrites the series (``stepper.comm.on_root``), then
+        every rank reads it, so each rank of an MPI job names its part of the next snapshot
+        by the count (on rank 0 the reading finds what it wrote)."""
+        comm = stepper.comm
+        comm.on_root(lambda: self.series.resume(stepper.t))
+        comm.barrier()
+        self.series.resume(stepper.t, write=False)
 
     def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
         if snapshot_due(stepper):
@@ -320,9 +327,8 @@ class Checkpoints(Writer):
     """``checkpoint.h5`` every ``output.checkpoint_every`` steps and at the end
     (:func:`~ngfrac.io.checkpoint.save_checkpoint`, written atomically).
 
-    In an MPI job every rank has one (the fields are gathered to rank 0, which writes the
-    serial checkpoint: :func:`ngfrac.parallel.checkpoints.gather_state`); ``folder`` is None
-    on the ranks other than 0.
+    In an MPI job every rank has one (``stepper.comm.gather_state`` gathers the fields to rank
+    0, which writes the serial checkpoint); ``folder`` is None on the ranks other than 0.
     """
 
     def __init__(self, folder: RunFolder | None, scene: Scene) -> None:
@@ -369,62 +375,6 @@ class CrackPathCSV(Writer):
     def finish(self, stepper: "PhaseFieldStepper") -> None:
         with stepper.timer.phase("output: crack path"), self.folder.manifest.writing("crack_path.csv"):
             write_crack_path(self.folder.path, stepper)
-
-
-class GatheredResults(Writer):
-    """``results.h5`` (and ``results.xdmf``) and ``crack_path.csv`` of an MPI run, on every
-    rank: at each snapshot (:func:`snapshot_due`) and at the end u and z are gathered to rank
-    0's serial mesh (:func:`ngfrac.parallel.checkpoints.gather_view`), where the serial
-    writers (:class:`ResultsH5`, :func:`write_crack_path`) write them; ``folder`` is None on
-    the other ranks. After :class:`HistoryCSV` (the crack path reads history.csv)."""
-
-    def __init__(self, folder: RunFolder | None, scene: Scene, restart: bool = False) -> None:
-        self.folder = folder
-        self.scene = scene
-        self.restart = restart
-        self.results = _results_h5(folder, scene) if folder is not None else None
-
-    def _view(self, stepper: "PhaseFieldStepper") -> Any:
-        with stepper.timer.phase("output: VTK and snapshots"):
-            return stepper.comm.gather_view(stepper)
-
-    def start(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        snapshot = self.scene.output.results and self.scene.output.vtk_every
-        view = self._view(stepper) if snapshot and not self.restart else None
-        if self.results is not None:
-            self.results.start(view if view is not None else _Counters(stepper), record)
-
-    def record(self, stepper: "PhaseFieldStepper", record: "StepRecord") -> None:
-        if not self.scene.output.results:
-            return
-        view = self._view(stepper) if snapshot_due(stepper) else None
-        writer = self.results.writer if self.results is not None else None
-        if writer is None:
-            return
-        if record.has_diagnostics:
-            writer.append(record)
-        if view is not None:
-            writer.write_snapshot(view)
-
-    def finish(self, stepper: "PhaseFieldStepper") -> None:
-        view = self._view(stepper)
-        if self.results is not None:
-            self.results.close()
-        if self.folder is not None:
-            with (stepper.timer.phase("output: crack path"),
-                  self.folder.manifest.writing("crack_path.csv")):
-                write_crack_path(self.folder.path, view)
-
-    def close(self) -> None:
-        if self.results is not None:
-            self.results.close()
-
-
-class _Counters:
-    """The step and time of a stepper (what :class:`ResultsH5` reads at a restart)."""
-
-    def __init__(self, stepper: "PhaseFieldStepper") -> None:
-        self.k, self.t = stepper.k, stepper.t
 
 
 OPENING_HALF_WIDTH = 10.0
@@ -513,17 +463,6 @@ class Progress(Writer):
             self.bar.close()
 
 
-def _results_h5(folder: RunFolder, scene: Scene) -> ResultsH5 | None:
-    """The results.h5 writer when ``output.results`` (none for a restart of a folder without
-    results.h5, e.g. of a distributed run before ngfrac wrote one there: a warning)."""
-    if not scene.output.results:
-        return None
-    if folder.restart and not (folder.path / "results.h5").exists():
-        log.warning("no results.h5 in %s to continue; the restart writes none", folder.path)
-        return None
-    return ResultsH5(folder, scene)
-
-
 def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list[Writer]:
     """The writers of ``ngfrac run``, in the order they are called.
 
@@ -535,7 +474,7 @@ def default_writers(folder: RunFolder, scene: Scene, plots: bool = True) -> list
     """
     vtk = VTKSnapshots(folder, scene)
     writers: list[Writer] = [HistoryCSV(folder)]
-    results = _results_h5(folder, scene)
+    results = ResultsH5.for_folder(folder, scene)
     if results is not None:
         writers.append(results)
     writers += [vtk, Checkpoints(folder, scene), CrackPathCSV(folder)]

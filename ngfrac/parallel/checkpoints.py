@@ -5,21 +5,20 @@ serial copy of the fields matched dof by dof (:class:`~ngfrac.parallel.adaptivit
 the gather of a mesh change). :func:`gather_state` gathers u, u_prev and z into that copy and
 gives rank 0 the serial :class:`~ngfrac.solve.state.StepperState`, which
 :func:`~ngfrac.io.checkpoint.save_state` writes as a serial run's ``checkpoint.h5`` (same
-format, same atomic write). :func:`resume_distributed` reads a checkpoint on rank 0,
-distributes its mesh and scatters its fields as after a mesh change, and broadcasts the rest
-of the state (counters, crack tracking, the adapter's state). The checkpoint is serial, so a
+format, same atomic write). :func:`resume_distributed` distributes the mesh of the
+checkpoint rank 0 read (``comm.read_on_root``), scatters its fields as after a mesh change
+and broadcasts the rest of the state (counters, crack tracking, the adapter's state). The checkpoint is serial, so a
 run continues on any number of processes, or serially (:func:`ngfrac.io.checkpoint.resume`).
 """
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import ngsolve as ngs
 
-from ..io.checkpoint import CheckpointError, CheckpointState, load_checkpoint
+from ..io.checkpoint import CheckpointError, CheckpointState
 from ..solve.state import STATE_FIELDS, StepperState, copy_of
 
 if TYPE_CHECKING:
@@ -27,7 +26,7 @@ if TYPE_CHECKING:
     from ..solve.stepper import PhaseFieldStepper
     from .communicator import MPICommunicator
 
-__all__ = ["RootView", "gather_state", "gather_view", "load_on_root", "resume_distributed"]
+__all__ = ["RootView", "gather_state", "gather_view", "resume_distributed"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,13 +53,12 @@ def gather_view(stepper: "PhaseFieldStepper") -> RootView | None:
 
 def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:
     """The stepper's state on rank 0's serial mesh (:meth:`PhaseFieldStepper.state` with u,
-    u_prev and z gathered dof by dof); None on the other ranks. Collective.
-
-    On one process the stepper's own :meth:`~PhaseFieldStepper.state`.
+    u_prev and z gathered dof by dof); None on the other ranks. Collective
+    (:meth:`MPICommunicator.gather_state <ngfrac.parallel.MPICommunicator.gather_state>`; on
+    one process :meth:`Serial.gather_state <ngfrac.solve.communicator.Serial.gather_state>`
+    is the stepper's own :meth:`~PhaseFieldStepper.state`).
     """
     comm = stepper.comm
-    if not comm.distributed:
-        return stepper.state()
     serial = comm.root_copy(stepper.scene).gather(stepper.fields, STATE_FIELDS)
     state = stepper.state()  # counters, crack tracking, adapter: the same on every rank
     if not comm.is_root:
@@ -70,27 +68,11 @@ def gather_state(stepper: "PhaseFieldStepper") -> StepperState | None:
                                        for name in STATE_FIELDS})
 
 
-def load_on_root(path: str | Path, scene: "Scene",
-                 comm: "MPICommunicator") -> CheckpointState | None:
-    """:func:`~ngfrac.io.checkpoint.load_checkpoint` on rank 0 (None elsewhere). Collective:
-    a missing or unusable checkpoint raises the same :class:`CheckpointError` on every rank,
-    so the job ends with one line from rank 0 instead of an ``Abort``."""
-    loaded, error = None, None
-    if comm.is_root:
-        try:
-            loaded = load_checkpoint(path, scene)
-        except CheckpointError as err:
-            error = str(err)
-    error = comm.comm.bcast(error, root=0)
-    if error is not None:
-        raise CheckpointError(error)
-    return loaded
-
-
 def resume_distributed(checkpoint: CheckpointState | None, scene: "Scene",
                        comm: "MPICommunicator") -> "PhaseFieldStepper":
-    """A distributed stepper of ``scene`` continuing from ``checkpoint`` (rank 0's
-    :func:`load_on_root`; None on the other ranks). Collective.
+    """A distributed stepper of ``scene`` continuing from ``checkpoint`` (rank 0's, read by
+    :meth:`MPICommunicator.read_on_root <ngfrac.parallel.MPICommunicator.read_on_root>`;
+    None on the other ranks). Collective.
 
     Rank 0 rebuilds the checkpoint's serial mesh and fields; the mesh is distributed, rank
     0's copy matched to it and u, u_prev and z scattered to the ranks; the step counters,
@@ -116,7 +98,7 @@ def resume_distributed(checkpoint: CheckpointState | None, scene: "Scene",
     rest = None
     if comm.is_root:
         rest = dataclasses.replace(serial, mesh=None, fields={})
-    rest = comm.comm.bcast(rest, root=0)
+    rest = comm.broadcast(rest)
     state = dataclasses.replace(rest, mesh=mesh,
                                 fields={name: getattr(local, name) for name in STATE_FIELDS})
     stepper = PhaseFieldStepper(scene, state=state, comm=comm)

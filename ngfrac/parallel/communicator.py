@@ -21,8 +21,10 @@ import contextlib
 import logging
 import math
 import os
+import pickle
 import sys
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Protocol, Sequence, TypeVar
 
 import numpy as np
 import ngsolve as ngs
@@ -31,6 +33,8 @@ from ..fem.ranks import sum_over_ranks
 from ..solve.communicator import SERIAL, Communicator, ParallelError, Serial
 
 if TYPE_CHECKING:
+    from ..io.checkpoint import CheckpointState
+    from ..io.writers import RunFolder, Writer
     from ..mesh.adapter import MeshAdapter
     from ..physics.crack_models import CrackModel
     from ..solve.state import StepperState
@@ -40,12 +44,16 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from ..solve.crack_tracking import CrackTracker
     from ..mesh.fields import MeshFields
+    from ..solve.z_system import ZForms
+    from .z_system import DistributedSystem
 
 __all__ = ["MPICommunicator", "launched_rank", "launched_size", "world"]
 # SERIAL, Communicator, ParallelError and Serial are ngfrac.solve.communicator's (imported here
 # for the callers that name them from ngfrac.parallel)
 
 log = logging.getLogger(__name__)
+
+T = TypeVar("T")
 
 LAUNCHER_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE")
 """Environment variables a launcher sets to the job's size (Open MPI; MPICH, Intel MPI, srun)."""
@@ -90,8 +98,6 @@ class MPICommunicator:
     z_preconditioner : str
         Of the z-CG: ``"local"`` (Jacobi, the default) or ``"bddc"``.
     """
-
-    distributed = True
 
     def __init__(self, comm: Any = None, z_preconditioner: str = "local") -> None:
         from mpi4py import MPI  # before NGSolve first meets a communicator (it loads its wrapper)
@@ -140,6 +146,19 @@ class MPICommunicator:
             self._warned_p1 = True  # run_scene and the stepper both check
             log.warning("discretization.order = 1 under MPI: BDDC of P1 is one central direct "
                         "solve (no parallel speed-up); order >= 2 scales")
+
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None:
+        """Refuse a given mesh or a state not on a mesh distributed over this communicator:
+        the mesh of an MPI run is made on rank 0 from the scene or a checkpoint."""
+        if mesh is not None or state is not None and state.mesh.comm.size != self.size:
+            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene or a "
+                                "checkpoint; a given mesh or serial state is not supported: "
+                                "use ngfrac.parallel.checkpoints.resume_distributed")
+
+    def concurrent_substeps(self, requested: bool) -> bool:
+        """False: the sub-steps run one after the other on a distributed mesh (each one's
+        collective operations must come in the same order on every rank)."""
+        return False
 
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
         """``build()`` on rank 0 (it keeps the whole mesh for the crack set), distributed."""
@@ -203,17 +222,56 @@ class MPICommunicator:
         """Rank 0's ``value`` on every rank. Collective."""
         return self.comm.bcast(value, root=0)
 
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any:
-        """The z-system of a distributed mesh: ``integrand`` as one form with this
+    def z_system(self, forms: "ZForms") -> "DistributedSystem":
+        """The z-system of a distributed mesh: the whole matrix as one form with this
         communicator's preconditioner, solved by CG
         (:class:`~ngfrac.parallel.z_system.DistributedSystem`)."""
         from .z_system import DistributedSystem
 
-        return DistributedSystem(fes, integrand, self.z_preconditioner)
+        return DistributedSystem(forms, self.z_preconditioner)
 
     def barrier(self) -> None:
         """Wait for every rank."""
         self.comm.Barrier()
+
+    # -- the run: its folder, restart and writers ---------------------------------------------
+    def on_root(self, make: Callable[[], T]) -> T | None:
+        """``make()`` on rank 0, None on the others (not collective: an error is rank 0's,
+        which :meth:`guard` turns into the end of the job)."""
+        return make() if self.is_root else None
+
+    def read_on_root(self, read: Callable[[], T]) -> T | None:
+        """``read()`` on rank 0, None on the others. Collective: an error it raises is raised
+        on every rank alike (a missing or foreign checkpoint), so the job ends with one line
+        from rank 0 and its exit status instead of an ``Abort``."""
+        value, error = None, None
+        if self.is_root:
+            try:
+                value = read()
+            except Exception as err:  # noqa: BLE001 - every rank must hear of it, or they hang
+                error = err
+        sent = self.comm.bcast(_sendable(error), root=0)
+        if error is not None:
+            raise error
+        if sent is not None:
+            raise sent
+        return value
+
+    def resume(self, checkpoint: "CheckpointState | None", scene: "Scene") -> "PhaseFieldStepper":
+        """A distributed stepper continuing from rank 0's checkpoint (None on the others):
+        :func:`~ngfrac.parallel.checkpoints.resume_distributed`. Collective."""
+        from .checkpoints import resume_distributed
+
+        return resume_distributed(checkpoint, scene, self)
+
+    def run_writers(self, default: Callable[[], list["Writer"]], folder: "RunFolder | None",
+                    out: Path, scene: "Scene", extra: Sequence["Writer"],
+                    restart: bool) -> list["Writer"]:
+        """This rank's writers (:func:`~ngfrac.parallel.writers.rank_writers`; not
+        ``default``, the serial ones). Collective."""
+        from .writers import rank_writers
+
+        return rank_writers(folder, out, scene, extra, restart, self)
 
     def max(self, value: float) -> float:
         """The largest of the ranks' values (the same on every rank)."""
@@ -275,6 +333,18 @@ class MPICommunicator:
             sys.stderr.flush()
             self.comm.Abort(code)
             os._exit(code)  # Abort may return before the launcher ends this process
+
+
+def _sendable(error: BaseException | None) -> BaseException | None:
+    """``error`` if it can be pickled (sent to the other ranks), else a RuntimeError with its
+    type and message."""
+    if error is None:
+        return None
+    try:
+        pickle.loads(pickle.dumps(error))
+    except Exception:  # noqa: BLE001 - any error of pickling
+        return RuntimeError(f"{type(error).__name__}: {error}")
+    return error
 
 
 class _RootNodes:

@@ -1,11 +1,17 @@
-"""The seam between one process and many: what the stepper, its sub-problems and the writers
-ask of the processes of a run (:class:`Communicator`), and the one-process answer
-(:class:`Serial`, :data:`SERIAL`). The MPI answer is :class:`ngfrac.parallel.MPICommunicator`.
+"""The seam between one process and many: what the stepper, its sub-problems, the writers and
+the run (:mod:`ngfrac.runner`) ask of the processes of a run (:class:`Communicator`), and the
+one-process answer (:class:`Serial`, :data:`SERIAL`). The MPI answer is
+:class:`ngfrac.parallel.MPICommunicator`.
+
+What the run asks (its folder, its restart, its writers) is built from layers above this one
+(``ngfrac.io``), so those methods take it as arguments: the serial answer calls what it is
+given, the MPI answer (in ``ngfrac.parallel``, which may import io) builds its own.
 """
 from __future__ import annotations
 
 import contextlib
-from typing import TYPE_CHECKING, Any, Callable, Protocol
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Protocol, Sequence, TypeVar
 
 import ngsolve as ngs
 
@@ -18,8 +24,11 @@ if TYPE_CHECKING:
     from .crack_tracking import CrackTracker
     from .state import StepperState
     from .stepper import PhaseFieldStepper
+    from .z_system import AssembledSystem, ZForms, ZSystem
 
 __all__ = ["SERIAL", "Communicator", "ParallelError", "Serial"]
+
+T = TypeVar("T")
 
 
 class ParallelError(RuntimeError):
@@ -32,9 +41,10 @@ class Communicator(Protocol):
     size: int
     rank: int
     is_root: bool
-    distributed: bool
 
     def check(self, scene: "Scene") -> None: ...
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None: ...
+    def concurrent_substeps(self, requested: bool) -> bool: ...
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh: ...
     def u_solver(self, solver: str) -> str: ...
     def mesh_adapter(self, scene: "Scene", crack_model: "CrackModel") -> "MeshAdapter": ...
@@ -46,8 +56,14 @@ class Communicator(Protocol):
     def gather_state(self, stepper: "PhaseFieldStepper") -> "StepperState | None": ...
     def gather_view(self, stepper: "PhaseFieldStepper") -> Any: ...
     def broadcast(self, value: Any) -> Any: ...
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> Any: ...
+    def z_system(self, forms: "ZForms") -> "ZSystem": ...
     def barrier(self) -> None: ...
+    # -- the run (ngfrac.runner): rank rules of its folder, restart and writers
+    def on_root(self, make: Callable[[], T]) -> T | None: ...
+    def read_on_root(self, read: Callable[[], T]) -> T | None: ...
+    def resume(self, checkpoint: Any, scene: "Scene") -> "PhaseFieldStepper": ...
+    def run_writers(self, default: Callable[[], list[Any]], folder: Any, out: Path,
+                    scene: "Scene", extra: Sequence[Any], restart: bool) -> list[Any]: ...
 
 
 class Serial:
@@ -56,10 +72,17 @@ class Serial:
     size = 1
     rank = 0
     is_root = True
-    distributed = False
 
     def check(self, scene: "Scene") -> None:
         """Nothing to refuse: every scene runs on one process."""
+
+    def check_start(self, mesh: ngs.Mesh | None, state: "StepperState | None") -> None:
+        """Nothing to refuse: a stepper on one process starts from any given mesh or state."""
+
+    def concurrent_substeps(self, requested: bool) -> bool:
+        """``requested`` (``discretization.concurrent_substeps``): the u- and the z-sub-step
+        may run at the same time."""
+        return requested
 
     def distribute(self, build: Callable[[], ngs.Mesh]) -> ngs.Mesh:
         """The mesh ``build()`` makes."""
@@ -107,13 +130,35 @@ class Serial:
         """``value`` (rank 0's, on every rank)."""
         return value
 
-    def z_system(self, fes: ngs.FESpace, integrand: Any) -> None:
-        """None: on one process the z-problem assembles K, M and the drive apart and
-        factorizes (:mod:`ngfrac.solve.z_problem`)."""
-        return None
+    def z_system(self, forms: "ZForms") -> "AssembledSystem":
+        """The z-system of one process: K, M and the drive assembled apart, a direct solve
+        (factorized once, updated per step), CG or the obstacle problem
+        (:class:`~ngfrac.solve.z_system.AssembledSystem`)."""
+        from .z_system import AssembledSystem
+
+        return AssembledSystem(forms)
 
     def barrier(self) -> None:
         """Nothing to wait for."""
+
+    def on_root(self, make: Callable[[], T]) -> T:
+        """``make()``: the one process is rank 0 (what only rank 0 does, e.g. the run folder)."""
+        return make()
+
+    def read_on_root(self, read: Callable[[], T]) -> T:
+        """``read()``; its errors propagate as they are."""
+        return read()
+
+    def resume(self, checkpoint: Any, scene: "Scene") -> "PhaseFieldStepper":
+        """The stepper a checkpoint continues
+        (:meth:`ngfrac.io.checkpoint.CheckpointState.resume`)."""
+        return checkpoint.resume(scene)
+
+    def run_writers(self, default: Callable[[], list[Any]], folder: Any, out: Path,
+                    scene: "Scene", extra: Sequence[Any], restart: bool) -> list[Any]:
+        """The run's writers: ``default()`` (:func:`ngfrac.io.writers.default_writers` of
+        the folder) and then ``extra``."""
+        return [*default(), *extra]
 
 
 SERIAL = Serial()

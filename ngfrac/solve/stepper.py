@@ -26,7 +26,7 @@ import ngsolve as ngs
 
 from ..mesh.adapter import Adaptation
 from ..geometry.domains import Domain, domain_of
-from .communicator import SERIAL, Communicator, ParallelError
+from .communicator import SERIAL, Communicator
 from ..physics.crack_models import CrackModel
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..physics.elastic import ElasticModel
@@ -88,11 +88,7 @@ class PhaseFieldStepper:
         self.comm: Communicator = SERIAL if comm is None else comm
         """The processes of the run (:mod:`ngfrac.parallel`)."""
         self.comm.check(scene)
-        if self.comm.distributed and (mesh is not None or state is not None
-                                      and state.mesh.comm.size != self.comm.size):
-            raise ParallelError("an MPI run makes its mesh on rank 0 from the scene or a "
-                                "checkpoint; a given mesh or serial state is not supported: "
-                                "use ngfrac.parallel.checkpoints.resume_distributed")
+        self.comm.check_start(mesh, state)  # MPI: no given mesh, no serial state
         self.model = elastic_model_of(scene) if elastic_model is None else elastic_model
         """The elastic model (:mod:`ngfrac.physics.elastic`)."""
         self.crack_model = crack_model_of(scene) if crack_model is None else crack_model
@@ -103,8 +99,8 @@ class PhaseFieldStepper:
         self.control = StepSizeControl(scene.time)
         self.context = StepContext(ngs.Parameter(0.0), ngs.Parameter(1.0 / scene.time.dt),
                                    ThreadPolicy(scene.discretization.threaded_solves,
-                                                concurrent=(scene.discretization.concurrent_substeps
-                                                            and not self.comm.distributed)),
+                                                concurrent=self.comm.concurrent_substeps(
+                                                    scene.discretization.concurrent_substeps)),
                                    PhaseTimer(), self.comm)
         """The step's time and 1/dt Parameters, the thread policy and the phase timer."""
         self.domain: Domain = domain_of(scene.geometry)

@@ -26,7 +26,7 @@ from ..runner import CHECKPOINT, run_scene
 from ..scene import Components, Scene
 from ..solve.stepper import PhaseFieldStepper, SolverError
 from ..solve.u_problem import DisplacementProblem
-from ..solve.z_problem import PhaseFieldProblem
+from ..solve.z_system import AssembledSystem
 
 from .scenes import demo_data, scene_from
 
@@ -510,14 +510,14 @@ def poison(sub_step: str) -> tuple[type, str, Callable]:
                 fixed = ~np.array(self.fields.fes_u.FreeDofs(), dtype=bool)
                 self.fields.u.vec.FV().NumPy()[fixed] = math.nan
         return DisplacementProblem, "apply_boundary_values", apply_boundary_values
-    original_system = PhaseFieldProblem._solve_system
+    original_system = AssembledSystem.solve_system
 
-    def solve_system(self, step):
-        iterations = original_system(self, step)
+    def solve_system(self, z_trial, step):
+        iterations = original_system(self, z_trial, step)
         if _failing(self.context.time):
-            self.z_trial.vec[:] = math.nan
+            z_trial.vec[:] = math.nan
         return iterations
-    return PhaseFieldProblem, "_solve_system", solve_system
+    return AssembledSystem, "solve_system", solve_system
 
 
 @dataclass(frozen=True)

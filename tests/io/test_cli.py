@@ -7,8 +7,14 @@ from pathlib import Path
 
 import pytest
 
-from ngfrac import cli
-from ngfrac.geometry.domains import Rectangle
+from ngfrac import cli, runner
+from ngfrac.geometry.domains import MeshingError, Rectangle
+from ngfrac.io.checkpoint import CheckpointError
+from ngfrac.io.hdf5 import ResultsError
+from ngfrac.io.output import OutputError
+from ngfrac.scene import SceneError
+from ngfrac.solve.communicator import ParallelError
+from ngfrac.solve.u_problem import SolverError
 
 from ngfrac.testing.bad_inputs import ALL_CASES, bad_scene_file
 
@@ -177,6 +183,34 @@ def test_meshing_failure_during_the_run_exits_3_in_one_line(tmp_path, monkeypatc
     assert code == 3
     one_error_line(capfd.readouterr().err, r"Netgen could not mesh the rectangle .*; run ngfrac check")
 
+
+
+def _raising(error):
+    def run_scene(*args, **kwargs):
+        raise error
+    return run_scene
+
+
+@pytest.mark.parametrize("error, status", [
+    (CheckpointError("checkpoint 'x.h5' was written for another scene"), 2),
+    (ResultsError("results file 'results.h5' was written for another scene"), 2),
+    (OutputError("the run folder is not empty"), 2), (SceneError("time.dt must be > 0"), 2),
+    (ParallelError("an MPI run needs 3 or more processes"), 2),
+    (SolverError("the z-solve failed"), 3), (MeshingError("Netgen could not mesh it"), 3),
+    (RuntimeError("an unforeseen error"), 1)], ids=lambda value: type(value).__name__)
+def test_an_mpi_job_ends_with_the_exit_code_of_one_process(error, status, tmp_path, monkeypatch,
+                                                           capfd):
+    """An MPI job's guard ends it with runner.exit_code(error) (checked here without mpirun):
+    the status ngfrac run gives for the same error on one process (2 for a bad checkpoint)."""
+    assert runner.exit_code(error) == status
+    monkeypatch.setattr(runner, "run_scene", _raising(error))
+    arguments = ["run", SLIT, "--out", str(tmp_path / "run"), *QUICK, "--no-plots"]
+    if status == 1:  # not the CLI's to name: a traceback, and Python's status 1
+        with pytest.raises(RuntimeError, match="unforeseen"):
+            cli.main(arguments)
+        return
+    assert cli.main(arguments) == status
+    one_error_line(capfd.readouterr().err, re.escape(str(error)))
 
 # -- resolution warnings ------------------------------------------------------------------------
 

@@ -1,5 +1,5 @@
 """The z-step's right-hand side and the surface energy come from the assembled matrices
-(ngfrac.solve.z_problem): they must equal the integrals they replace, for AT2 and AT1, with
+(ngfrac.solve.z_system.AssembledSystem): they must equal the integrals they replace, for AT2 and AT1, with
 constant and varying toughness, and with a crack pressure.
 
 Both sides use the same quadrature rule, so they differ by round-off only: the tolerance,
@@ -72,7 +72,7 @@ def linear_form_rhs(stepper):
 def test_rhs_from_matrices_equals_the_linear_form(scene):
     stepper = stepped(scene)
     problem = stepper.z_problem
-    problem._assemble_system()  # the next step's system, from the current z_old and drive
+    problem.system.assemble()  # the next step's system, from the current z_old and drive
     ours, form = problem.rhs.FV().NumPy(), linear_form_rhs(stepper)
     assert np.abs(form).max() > 0
     np.testing.assert_allclose(ours, form, rtol=0, atol=ROUND_OFF * np.abs(form).max())
