@@ -134,10 +134,10 @@ class MPICommunicator:
             raise ParallelError(f"material.split = {scene.material.split!r} under MPI is "
                                       "not supported yet; set material.split = 'none' (or run "
                                       "serially)")
-        from ..physics.crack_models import crack_model
+        from ..scene.build import crack_model_of  # the scene's own (PF-CZM has parameters)
 
         update = scene.discretization.z_update
-        if crack_model(scene.phase_field.model).resolve_z_update(update) != "projection":
+        if crack_model_of(scene).resolve_z_update(update) != "projection":
             raise ParallelError(f"the z-update {update!r} (phase_field.model = "
                                 f"{scene.phase_field.model!r}) under MPI is not supported yet: "
                                 "only the paper's projection runs distributed (AT2 with "

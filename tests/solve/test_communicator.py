@@ -64,3 +64,13 @@ def test_an_mpi_start_refuses_a_given_mesh_or_a_serial_state_in_one_line():
             MPICommunicator.check_start(job, mesh, state)
     MPICommunicator.check_start(job, None, None)
     assert MPICommunicator.concurrent_substeps(job, True) is False
+
+
+def test_an_mpi_job_refuses_pf_czm_in_one_line_not_with_a_type_error():
+    """The MPI check asks the scene's own crack model (PF-CZM needs its parameters: built by
+    name it raised TypeError) and refuses its obstacle z-update in one line."""
+    from tests.physics.test_pfczm import bar_scene
+
+    job = SimpleNamespace(size=3, is_root=False, _warned_p1=True)
+    with pytest.raises(ParallelError, match="only the paper's projection runs distributed"):
+        MPICommunicator.check(job, bar_scene(0.1))
