@@ -8,9 +8,9 @@ from functools import partial
 
 import numpy as np
 
-from ..physics.crack_models import crack_model
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..scene import Scene
+from ..scene.build import crack_model_of
 from ..scene.checks import SAME_POINT
 from .adapter import AdaptivitySizes
 from .remesh import meshing_constants
@@ -63,7 +63,8 @@ def estimated_vertices(scene: "Scene") -> float:
     density = meshing_constants(dim).vertex_density
 
     eps = scene.phase_field.epsilon
-    model = crack_model(scene.phase_field.model)  # where its optimal profile falls to a level
+    model = crack_model_of(scene)  # where its optimal profile falls to a level (PF-CZM needs
+    # its parameters: crack_model(name) alone cannot build it)
     volume = domain.measure
     core = crack_measure(scene, model.half_width(eps, CORE_LEVEL))
     band = max(crack_measure(scene, model.half_width(eps, BAND_LEVEL)) - core, 0.0)
