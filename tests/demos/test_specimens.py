@@ -345,6 +345,27 @@ def test_specimen_quick(name, tmp_path, one_thread):
 
 
 @pytest.mark.slow
+def test_l_panel_full(tmp_path, one_thread):
+    # The full demo (PF-CZM, Cornelissen, Rankine drive, eps = 5 mm, P2 u, P1 z, adaptive
+    # under 8,000 vertices, to u = 0.4 mm). Winkler's experiment peaks at 6.7-7.6 kN for the
+    # 100 mm panel; this model does not reach that band: measured 0.0819 kN/mm (8.19 kN) at
+    # u = 0.181 mm (docs/validation.md), asserted as measured (2 %), not as the experiment.
+    # Measured: 295 steps, 272 s CPU (4.6 min wall) at a load of 1.9-2.6; this test took 332 s
+    # (310 s CPU) at a load of 1.6-4.3.
+    bounds = Bounds()
+    history, stepper = run_demo("l_panel", tmp_path / "lp", ["output.vtk_every=0"], bounds)
+    check_l_panel(history, stepper, bounds.onset)
+    u, force = history["uy_load"], history["Fy_load"]
+    peak = int(np.argmax(force))
+    assert abs(force[peak] / 0.0819 - 1) < 0.02 and 0.17 < u[peak] < 0.20, (force[peak], u[peak])
+    assert force[peak] * 100 > 7.6  # above Winkler's band: a known miss, not a target
+    # The crack rises from the corner and then runs at y ~ 260 mm: tip y in 249..263 mm.
+    grown = np.isfinite(history["tip_x"])
+    assert np.nanmin(history["tip_x"]) < 110 and np.all(history["tip_y"][grown] < 263), \
+        (np.nanmin(history["tip_x"]), np.nanmax(history["tip_y"]))
+
+
+@pytest.mark.slow
 def test_three_point_bending_full(tmp_path, one_thread):
     # The full demo (epsilon = 0.03 mm, P2, adaptive under 8,000 vertices). The published
     # number of this specimen is LEFM's: a sharp notch of a/W = 0.2 in a beam of S/W = 4 starts
