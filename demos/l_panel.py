@@ -1,10 +1,12 @@
-"""Demo: the L-shaped panel (Winkler's test, Ambati et al. 2015); the crack nucleates at the
-re-entrant corner and curves.
+"""Demo: the L-shaped panel (Winkler's concrete test) with PF-CZM (Wu 2017, Cornelissen
+softening, Rankine drive); the crack nucleates at the re-entrant corner and curves.
 
     python demos/l_panel.py [OUT_DIR] [--set key=value ...]
 
 `l_panel.toml` is a CAD domain (``geometry.kind = "occ"``: an L-shaped polygon and a small
-loading pad, its edges named by bounding boxes) with no initial crack, in mm and kN. The
+loading pad, its edges named by bounding boxes) with no initial crack, in mm and kN, plane
+stress, PF-CZM with a strength f_t (so the peak does not depend on epsilon; the scene's
+comment gives each parameter's source and docs/validation.md the measured peak). The
 bottom of the vertical leg is clamped and the pad under the horizontal arm, 30 mm from its
 end, is pulled up by t mm. The elastic stresses are singular at the re-entrant corner
 (250, 250) (stress ~ r^-0.456 at a 270 degree corner), so the crack set first appears there

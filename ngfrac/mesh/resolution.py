@@ -8,9 +8,9 @@ from functools import partial
 
 import numpy as np
 
-from ..scene.build import crack_model_of
 from ..physics.cracks import distance_to_cracks, initial_tip
 from ..scene import Scene
+from ..scene.build import crack_model_of
 from ..scene.checks import SAME_POINT
 from .adapter import AdaptivitySizes
 from .remesh import meshing_constants

@@ -15,6 +15,7 @@ from ngfrac import load_scene
 from ngfrac.scene import Geometry
 from ngfrac.scene.sections import Shape
 from ngfrac.io.plotting import read_history
+from ngfrac.physics.crack_models import largest_principal_stress
 
 from .loading import DEMOS, ROOT, load_demo
 
@@ -22,11 +23,13 @@ SPECIMENS = ("l_panel", "three_point_bending", "compact_tension", "three_hole_be
 """The specimen demos this file runs (tests/demos/test_demos.py runs the others)."""
 
 QUICK = {
-    # epsilon = 10 mm (the demo's 5), fixed steps of 0.01 mm, at most 2,000 vertices: 45 steps,
-    # ~15 s on one quiet core. The crack nucleates near t = 0.3 mm and has run ~60 mm by 0.45.
+    # epsilon = 10 mm (the demo's 5), fixed steps of 0.01 mm to 0.42 mm, a 20 mm first mesh
+    # (597 vertices), at most 2,000: 42 steps, 17 s CPU. PF-CZM (Cornelissen, Rankine drive):
+    # sigma_1 passes f_t at the corner at t = 0.04 mm, the force peaks at 0.110 kN/mm at
+    # 0.27 mm and the crack has run ~50 mm by 0.42.
     "l_panel": ["phase_field.epsilon=10", "time.dt=1e-2", "time.adaptive=false",
-                "time.t_end=0.45", "adaptivity.max_vertices=2000", "adaptivity.hmin=2",
-                "output.vtk_every=0"],
+                "time.t_end=0.42", "adaptivity.max_vertices=2000", "adaptivity.hmin=2",
+                "adaptivity.hmax=20", "output.vtk_every=0"],
     # epsilon = 0.06 mm (the demo's 0.03, the paper's other value), P1, fixed steps of 5e-4 mm,
     # at most 3,000 vertices: 120 steps, ~15 s on one quiet core. Peak near t = 0.048 mm.
     "three_point_bending": ["phase_field.epsilon=0.06", "discretization.order=1",
@@ -53,21 +56,35 @@ QUICK = {
 
 
 class Bounds:
-    """Checks 0 <= z <= 1 at every Lagrange node and keeps the last stepper."""
+    """Checks 0 <= z <= 1 at every Lagrange node and keeps the last stepper. With PF-CZM it
+    also records, per step, (t, largest sigma_1, largest z): the elastic phase's check."""
 
     def __init__(self):
         self.stepper = None
         self.steps = 0
+        self.onset = []
 
     def __call__(self, stepper):
         values = stepper.z_node_values()
         assert values.min() >= 0.0 and values.max() <= 1.0, (values.min(), values.max())
+        if stepper.scene.phase_field.model == "PF-CZM":
+            self.onset.append((stepper.t, largest_stress(stepper), float(values.max())))
         self.stepper = stepper
         self.steps += 1
 
 
-def run_demo(name, out, overrides):
-    bounds = Bounds()
+def largest_stress(stepper):
+    """The largest principal stress of the sound material, sigma_1 of C:e(u) (what the Rankine
+    drive sees), over the whole mesh: with P1 or P2 displacements the stress is linear on each
+    triangle and sigma_1 convex in it, so its maximum is at an element's vertex."""
+    mesh, u = stepper.fields.mesh, stepper.fields.u
+    sigma_1 = largest_principal_stress(stepper.model.stress(u), 2)
+    corners = ngs.IntegrationRule([(0, 0), (1, 0), (0, 1)], [0, 0, 0])
+    return float(np.max(sigma_1(mesh.MapToAllElements(corners, ngs.VOL))))
+
+
+def run_demo(name, out, overrides, bounds=None):
+    bounds = Bounds() if bounds is None else bounds
     load_demo(name).main(out, overrides, on_step=bounds)
     return read_history(out / "history.csv"), bounds.stepper
 
@@ -86,7 +103,8 @@ def elastic_stiffness(scene, loaded, component, maxh, order, refinements, opposi
                       degradation=None):
     """Force per unit displacement of the boundary ``loaded`` along ``component`` (0: x,
     1: y), the other displacement loads held at zero and ``free`` components free: twice the
-    elastic energy of the solution for a unit displacement (plane strain, sound material),
+    elastic energy of the solution for a unit displacement (plane strain or, with
+    ``model.kind = "plane_stress"``, lambda* = 2 lambda mu/(lambda + 2 mu); sound material),
     on a mesh of size ``maxh`` refined ``refinements`` times near the domain's vertices.
 
     ``opposite``: a boundary moved by -1 at the same time (a symmetric pair: the force on
@@ -110,7 +128,9 @@ def elastic_stiffness(scene, loaded, component, maxh, order, refinements, opposi
                 held[k].append(load.boundary)
     fes = ngs.VectorH1(mesh, order=order, dirichletx="|".join(held[0]),
                        dirichlety="|".join(held[1]))
-    lam, mu = scene.material.lam, scene.material.mu
+    lam, mu = scene.material.lame
+    if scene.model.kind == "plane_stress":
+        lam = 2 * lam * mu / (lam + 2 * mu)
     u, v = fes.TnT()
 
     def strain(w):
@@ -141,31 +161,39 @@ def elastic_stiffness(scene, loaded, component, maxh, order, refinements, opposi
 L_CORNER = np.array([250.0, 250.0])
 
 
-def check_l_panel(history, stepper):
+def check_l_panel(history, stepper, onset=None):
     scene = stepper.scene
     eps = scene.phase_field.epsilon
+    f_t = scene.material.strength
+    # PF-CZM's elastic phase: while the largest principal stress of the sound material is
+    # below f_t everywhere, z is exactly 0 at every node (the drive <sigma_1>^2/E stays below
+    # the constant source 2 G_f/(pi eps), and the obstacle solve keeps z at its bound); it
+    # fails if the source, the drive or a1 were wrong (AT2 damages at any load) and with P2 z
+    # (docs/theory.md: measured with discretization.order_z=2, z = 0.003 at sigma_1 = 0.55 f_t).
+    # Quick run: sigma_1 (at the re-entrant corner, singular, on the 20 mm first mesh) is 0.27,
+    # 0.55 and 0.82 f_t in the first three steps, z exactly 0; above f_t from t = 0.04 mm.
+    if onset is not None:
+        below = [(t, s1, z) for t, s1, z in onset if s1 < f_t]
+        assert below, f"sigma_1 reached f_t in the first step: {onset[:2]}"
+        assert all(z == 0.0 for _, _, z in below), [(t, s1 / f_t, z) for t, s1, z in below if z]
+        assert max(z for _, _, z in onset) > 0.5, "the panel never cracked"
     # No initial crack: the crack set first appears at the re-entrant corner, where the
-    # elastic stresses are singular (r^-0.456); the rest of the panel is smooth (the pad's
-    # corners are in the 100x tougher end of the arm). Quick run: 1.4 mm from the corner.
+    # elastic stresses are singular (r^-0.456). Quick run: 2.2 mm from the corner.
     nucleus = stepper.nucleus
     assert nucleus is not None, "no crack nucleated"
     distance = np.linalg.norm(nucleus[:2] - L_CORNER)
     assert distance < 2 * eps, f"nucleus {nucleus} is {distance:.1f} mm from the corner"
     # The initial slope is the elastic stiffness of the panel: the first step solves u on the
-    # sound panel (z = 0). Reference: P3 on h = 10 mm refined twice at the vertices, 0.6241
-    # kN/mm per mm (P3, h = 5, three refinements: 0.6239). The quick run's first mesh (h = 50
-    # mm, P2) is 1.6 % stiffer (measured: 0.6342); 3 % bounds that discretization error.
+    # sound panel (z = 0). Reference: P3 on h = 10 mm refined twice at the vertices (plane
+    # stress): 0.6037 kN/mm per mm. The quick run's first mesh (h = 20 mm, P2) is 0.8 % stiffer
+    # (measured: 0.6084); 3 % bounds that discretization error.
     u, force = history["uy_load"], history["Fy_load"]
     reference = elastic_stiffness(scene, "load", 1, maxh=10.0, order=3, refinements=2)
     slope = force[1] / u[1]
     assert abs(slope / reference - 1) < 0.03, f"slope {slope:.4f}, elastic {reference:.4f}"
-    # Linear before the damage localizes: AT2 softens the panel gradually (no elastic limit),
-    # by 0.3 % at u = 0.06 mm (quick run: F/u 0.6322 against 0.6342), 3.3 % at 0.15 mm.
-    early = (u > 0) & (u <= 0.06 + 1e-9)
-    assert np.all(np.abs(force[early] / u[early] / slope - 1) < 0.01), force[early] / u[early]
     # The crack then runs from the corner into the vertical leg (towards x = 0), near the
     # corner's height (Winkler's cracks curve up to y ~ 250-300 mm), and the force falls.
-    # Quick run: tip at x = 192, y = 259 by u = 0.45 mm; force 0.167 kN at the peak, 0.143 then.
+    # Quick run: tip at x = 200, y = 254 by u = 0.42 mm; force 0.110 kN at the peak, 0.081 then.
     grown = np.isfinite(history["tip_x"])
     assert np.nanmin(history["tip_x"]) < L_CORNER[0] - 4 * eps, np.nanmin(history["tip_x"])
     assert np.all(np.abs(history["tip_y"][grown] - 265.0) < 35.0), history["tip_y"][grown]
@@ -307,9 +335,34 @@ def test_every_specimen_has_a_check():
 
 @pytest.mark.parametrize("name", SPECIMENS)
 def test_specimen_quick(name, tmp_path, one_thread):
-    history, stepper = run_demo(name, tmp_path / name, QUICK[name])
+    bounds = Bounds()
+    history, stepper = run_demo(name, tmp_path / name, QUICK[name], bounds)
     assert stepper is not None and len(history["t"]) > 20
-    CHECKS[name](history, stepper)
+    if name == "l_panel":
+        check_l_panel(history, stepper, bounds.onset)
+    else:
+        CHECKS[name](history, stepper)
+
+
+@pytest.mark.slow
+def test_l_panel_full(tmp_path, one_thread):
+    # The full demo (PF-CZM, Cornelissen, Rankine drive, eps = 5 mm, P2 u, P1 z, adaptive
+    # under 8,000 vertices, to u = 0.4 mm). Winkler's experiment peaks at 6.7-7.6 kN for the
+    # 100 mm panel; this model does not reach that band: measured 0.0819 kN/mm (8.19 kN) at
+    # u = 0.181 mm (docs/validation.md), asserted as measured (2 %), not as the experiment.
+    # Measured: 295 steps, 272 s CPU (4.6 min wall) at a load of 1.9-2.6; this test took 332 s
+    # (310 s CPU) at a load of 1.6-4.3.
+    bounds = Bounds()
+    history, stepper = run_demo("l_panel", tmp_path / "lp", ["output.vtk_every=0"], bounds)
+    check_l_panel(history, stepper, bounds.onset)
+    u, force = history["uy_load"], history["Fy_load"]
+    peak = int(np.argmax(force))
+    assert abs(force[peak] / 0.0819 - 1) < 0.02 and 0.17 < u[peak] < 0.20, (force[peak], u[peak])
+    assert force[peak] * 100 > 7.6  # above Winkler's band: a known miss, not a target
+    # The crack rises from the corner and then runs at y ~ 260 mm: tip y in 249..263 mm.
+    grown = np.isfinite(history["tip_x"])
+    assert np.nanmin(history["tip_x"]) < 110 and np.all(history["tip_y"][grown] < 263), \
+        (np.nanmin(history["tip_x"]), np.nanmax(history["tip_y"]))
 
 
 @pytest.mark.slow
