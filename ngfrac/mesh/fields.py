@@ -15,7 +15,8 @@ from ..scene import Scene
 
 @dataclass(eq=False)
 class MeshFields:
-    """The mesh, the spaces of u (the elastic model's) and z (H1 of ``z_order``), the
+    """The mesh, the spaces of u (the elastic model's) and z (H1 of the order
+    :meth:`~ngfrac.scene.sections.Discretization.z_order_for` gives), the
     GridFunctions u, u_prev, z and the quadrature every form and energy uses.
 
     A mesh change makes a new ``MeshFields``; the sub-problems are built on it.
@@ -49,10 +50,11 @@ class MeshFields:
         if curved:  # curved boundaries (ngfrac.geometry.cad): isoparametric u
             scene.geometry.domain().curve(mesh, disc.order, [c.points for c in scene.cracks])
         fes_u = model.space(mesh, disc.order, scene.loads)
-        fes_z = ngs.H1(mesh, order=disc.z_order)
+        z_order = disc.z_order_for(crack_model)
+        fes_z = ngs.H1(mesh, order=z_order)
         exact = (scene.material.gamma.is_constant and scene.material.split == "none"
                  and not curved and crack_model.quadratic_degradation)
-        order = quadrature_order(disc.order, disc.z_order, exact=exact)
+        order = quadrature_order(disc.order, z_order, exact=exact)
         return cls(mesh, fes_u, fes_z, ngs.GridFunction(fes_u, "u"),
                    ngs.GridFunction(fes_u, "u_prev"), ngs.GridFunction(fes_z, "z"),
                    LagrangeNodes(fes_z), order, dx_of_order(mesh, order))

@@ -76,6 +76,9 @@ class CrackModel:
     (the paper's), and with w at most quadratic in z every form and energy is a polynomial of
     the degree :func:`ngfrac.fem.quadrature.quadrature_order` integrates exactly on affine
     elements."""
+    default_z_order: int | None = None
+    """The order of z when ``discretization.order_z`` is unset (0); None: that of u, at most 2
+    (:meth:`ngfrac.scene.sections.Discretization.z_order_for`)."""
 
     def resolve_z_update(self, requested: str) -> str:
         """The z-update a run uses for ``discretization.z_update = requested`` (``"auto"``:
@@ -248,6 +251,9 @@ class PFCZM(CrackModel):
     c_w = math.pi
     z_update = "obstacle"  # the constant source pulls the unconstrained step far below z_old
     quadratic_degradation = False
+    default_z_order = 1
+    """P1 z unless asked: with P2 z the nodal obstacle lets z grow below f_t at vertex nodes
+    (the elastic phase is lost; docs/theory.md, "PF-CZM and the hybrid formulation")."""
     """The rational g: the z-step takes its drive linearized at z_old (``drive_factors``)."""
 
     def __init__(self, young: float, toughness: float, strength: float, epsilon: float,

@@ -360,9 +360,10 @@ class Discretization(Section):
                 "'descent' (the projection, shortened where it would raise the z-step's "
                 "energy) or 'obstacle' (the z-step minimized under z >= z_old)")
 
-    @property
-    def z_order(self) -> int:
-        return self.order_z or min(self.order, 2)
+    def z_order_for(self, crack_model: "CrackModel") -> int:
+        """The order of z: ``order_z``; unset (0), the crack model's ``default_z_order``
+        (PF-CZM: 1), else that of u, at most 2."""
+        return self.order_z or crack_model.default_z_order or min(self.order, 2)
 
 
 VTK_FORMATS = ("auto", "subdivided", "vertices")

@@ -230,7 +230,7 @@ def test_one_band_dissipates_g_f_times_its_area():
                   {"boundary": "right", "value": [f"{u0} + t", "0"]}],
         "time": {"dt": DU_BAND, "t_end": u_end - u0},
         "adaptivity": {"enabled": False}, "output": {"vtk_every": 0},
-        "discretization": {"order": 2, "coupling": "staggered"}})
+        "discretization": {"order": 2, "order_z": 2, "coupling": "staggered"}})
     stepper = PhaseFieldStepper(scene)
     f = stepper.fields
     x = f.nodes.points[:, 0]
@@ -330,3 +330,23 @@ def test_elastic_phase_is_exact_under_a_non_uniform_stress(order_z):
     for _ in stepper.run():
         assert largest_sigma_1(stepper) < 1.0
     assert stepper.z_node_values().max() == 0.0
+
+
+
+@pytest.mark.parametrize("model, order_z, expected", [("PF-CZM", 0, 1), ("PF-CZM", 2, 2),
+                                                      ("AT2", 0, 2), ("AT1", 0, 2)])
+def test_z_is_p1_under_pf_czm_unless_asked(model, order_z, expected):
+    """PF-CZM's default z is P1 (its elastic phase is exact only there: the test above);
+    discretization.order_z = 2 still gives P2, and the AT models keep z of u's order (P2)."""
+    material = {"E": 1.0, "nu": 0.0, "gamma": 1.0}
+    if model == "PF-CZM":
+        material["strength"] = 1.0
+    scene = Scene.from_dict({
+        "model": {"kind": "plane_stress"}, "material": material,
+        "phase_field": {"epsilon": 0.05, "alpha2": 1e-4, "model": model},
+        "geometry": {"width": 1.0, "height": 1.0, "mesh_size": 0.25},
+        "loads": [{"boundary": "left", "value": ["0", "0"]}],
+        "time": {"dt": 0.01, "t_end": 0.02}, "adaptivity": {"enabled": False},
+        "output": {"vtk_every": 0}, "discretization": {"order": 2, "order_z": order_z}})
+    assert scene.discretization.z_order_for(crack_model_of(scene)) == expected
+    assert PhaseFieldStepper(scene).fields.fes_z.globalorder == expected
