@@ -9,6 +9,8 @@ an initial crack, in mm and kN. Each hole's circle is split into two arcs
 (``geometry.split_points``); the pins push on the arcs facing away from the crack plane: the
 upper hole's upper half moves up by t mm, the lower hole's lower half down. The crack grows
 from the pre-crack's tip (20, 0) along the symmetry line y = 0 while the pin force falls.
+The crack model is AT2 without a split (the paper's), so the material around the holes is
+toughened (compact_tension.toml says why, and that issue #25 asks to remove it).
 
 What to expect. ASTM E399: K_I = P/(B sqrt W) f(a/W) (:func:`astm_f`; f(0.5) = 9.659, within
 0.5 % of the f that ASTM E647's compliance fit gives through G = P^2/(2B) dC/da,

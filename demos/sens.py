@@ -14,10 +14,11 @@ tension/compression split show (Miehe et al.: a curved crack down to the bottom 
 about 0.5-0.55 kN near u = 0.01 mm). Griffith puts the start of growth of the sharp notch at
 u = 9.5e-3 mm, F = 0.60 kN.
 
-This model has no split: sigma:e drives z whatever the sign of the stresses, and ahead of a
-mode II tip sigma:e is largest straight ahead (the shear strain), not along the hoop-stress
-direction. So the notch grows straight ahead as a shear band along y = 0.5 to the right edge,
-and the force peaks and then drops to nearly zero. Measured (``python demos/sens.py``,
+This demo's model, AT2 without a split (the paper's; sens.toml), lets sigma:e drive z
+whatever the sign of the stresses, and ahead of a mode II tip sigma:e is largest straight
+ahead (the shear strain), not along the hoop-stress direction. So the notch grows straight
+ahead as a shear band along y = 0.5 to the right edge, and the force peaks and then drops
+to nearly zero. Measured (``python demos/sens.py``,
 epsilon = 0.015 mm, P2, adaptive up to 8,000 vertices, adaptive steps of 2e-5..3.2e-4 mm,
 261 steps to u = 0.018 mm; 4.8 min with ``NGFRAC_THREADS=1`` while the test suite ran on the
 other core): peak 0.509 kN at u = 0.0101 mm (16% below the sharp notch's Griffith load

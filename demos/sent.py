@@ -14,7 +14,8 @@ F_c = 0.646 kN; with the toughness of the discrete band, gamma (1 + h/(2 epsilon
 of h = 1.5e-3 mm, u_c = 4.68e-3 mm and F_c = 0.66 kN. Growth is unstable under displacement
 control, so that is also the peak of a sharp-crack model.
 The phase-field specimen is softer than the LEFM one: the notch is a band of width ~2 epsilon
-with a rounded end, and AT2 (no elastic limit) damages the whole ligament before the peak.
+with a rounded end, and AT2 (the scene's crack model, without a split; no elastic limit)
+damages the whole ligament before the peak.
 So its peak comes later than u_c and at a force near F_c: the published no-split curves for
 epsilon = 0.015 mm peak at about 0.7-0.75 kN near u = 5.5-6e-3 mm.
 

@@ -7,6 +7,8 @@ curve.
 small pads, the pads' faces named by bounding boxes) with the notch as an initial crack, in
 mm and kN. The top pad is pushed down by t mm between two supports. The crack grows from the
 notch tip (4, 0.4) straight up the symmetry line x = 4 while the force on the top pad falls.
+The crack model is AT2 without a split (the paper's), so the pads are toughened
+(three_point_bending.toml says why, and that issue #25 asks to remove them).
 
 What to expect. LEFM for this specimen (span S = 8, height W = 2, a/W = 0.2; Srawley's
 formula for S/W = 4, accurate to 0.5 %) gives K_I = 3.323 P, so a sharp crack starts to grow
