@@ -13,7 +13,8 @@ V and w(0)) and the usual plots.
 
 What to expect (docs/theory.md, "Pressurized cracks", has the table): the opening happens in
 the crack's core where the stiffness (1 - z)^2 + eta is nearly zero, so the core's element
-size h_crack matters more than epsilon; the demo's epsilon = 0.05 with h_crack = eps/4.
+size h_crack matters more than epsilon; the demo's epsilon = 0.1 (eps/l0 = 0.1) with
+h_crack = eps/20 and h_band = eps/4 (demos/sneddon.toml).
 """
 from __future__ import annotations
 
