@@ -25,11 +25,6 @@ __all__ = ["crack_problems", "nonfinite_value", "check_times"]
 SAME_POINT = 1e-9
 """Points closer than this times the domain's diameter are the same point."""
 
-def _domain(geometry: "Geometry") -> "Domain":
-    """The domain of a geometry section."""
-    return geometry.domain()
-
-
 def _text(point: np.ndarray) -> str:
     return "(" + ", ".join(f"{c:.6g}" for c in point) + ")"
 
@@ -262,7 +257,7 @@ def crack_problems(geometry: "Geometry", cracks: Sequence[Sequence[Sequence[floa
     normals : list of (3,) arrays
         3D: the unit normal of each polygon.
     """
-    domain = _domain(geometry)
+    domain = geometry.domain()
     tol = SAME_POINT * domain.diameter
     sides = domain.sides() if hasattr(domain, "sides") else None  # axis-aligned: exact sides
     for i, crack in enumerate(cracks):
