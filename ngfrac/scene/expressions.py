@@ -47,12 +47,23 @@ def _numpy_functions() -> dict[str, Callable[..., Any]]:
             "min": np.minimum, "max": np.maximum}
 
 
+def _ngsolve_tanh(a: Any) -> Any:
+    """tanh of a CoefficientFunction (NGSolve has none) from exp of a non-positive argument
+    only: (exp(2a) - 1)/(exp(2a) + 1) alone is inf/inf = NaN for a > 354, which a steep step
+    such as ``tanh((y - 8)/0.005)`` reaches on its domain (numpy's tanh, which validates the
+    scene, is 1 there)."""
+    import ngsolve as ngs
+
+    negative = ngs.exp(-2 * ngs.IfPos(a, a, -a))
+    return ngs.IfPos(a, (1 - negative) / (1 + negative), (negative - 1) / (negative + 1))
+
+
 def _ngsolve_functions() -> dict[str, Callable[..., Any]]:
     import ngsolve as ngs
 
     return {"sin": ngs.sin, "cos": ngs.cos, "tan": ngs.tan, "exp": ngs.exp, "log": ngs.log,
             "sqrt": ngs.sqrt, "atan": ngs.atan, "atan2": ngs.atan2, "abs": lambda a: ngs.IfPos(a, a, -a),
-            "tanh": lambda a: (ngs.exp(2 * a) - 1) / (ngs.exp(2 * a) + 1),
+            "tanh": _ngsolve_tanh,
             "sinh": ngs.sinh, "cosh": ngs.cosh,
             "min": lambda a, b: ngs.IfPos(a - b, b, a),
             "max": lambda a, b: ngs.IfPos(a - b, a, b)}

@@ -16,6 +16,19 @@ def test_numpy_and_ngsolve_agree():
         assert cf(mesh(px, py)) == pytest.approx(float(expected), rel=1e-12)
 
 
+@pytest.mark.parametrize("scale", [0.2, 0.001])
+def test_tanh_is_finite_and_agrees_with_numpy_for_steep_steps(scale):
+    """A steep tanh step (arguments up to 0.5/scale) is finite and numpy's on the mesh: the
+    form (exp(2a) - 1)/(exp(2a) + 1) alone was NaN for a > 354 (the three-hole beam's pads)."""
+    expr = Expression(f"tanh((x - 0.5)/{scale}) + tanh((0.3 - y)/{scale})")
+    mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
+    cf = expr.to_coefficient(ngs.Parameter(0.0))
+    for px, py in [(0.0, 0.0), (1.0, 1.0), (0.499, 0.301), (0.5, 0.3), (0.9, 0.1)]:
+        expected = float(expr.evaluate_numpy({"x": px, "y": py, "t": 0.0}))
+        # 1e-12: the mesh point's x, y carry ~1e-16 of round-off, times 1/scale = 1000
+        assert cf(mesh(px, py)) == pytest.approx(expected, rel=1e-12, abs=1e-12)
+
+
 def test_constant_expression():
     expr = Expression.of(2.5)
     assert expr.is_constant and expr.value() == 2.5
