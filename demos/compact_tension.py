@@ -9,8 +9,8 @@ an initial crack, in mm and kN. Each hole's circle is split into two arcs
 (``geometry.split_points``); the pins push on the arcs facing away from the crack plane: the
 upper hole's upper half moves up by t mm, the lower hole's lower half down. The crack grows
 from the pre-crack's tip (20, 0) along the symmetry line y = 0 while the pin force falls.
-The crack model is AT2 without a split (the paper's), so the material around the holes is
-toughened (compact_tension.toml says why, and that issue #25 asks to remove it).
+The crack model is AT2 with Miehe's split in the hybrid formulation; G_c is uniform (no
+toughened zone).
 
 What to expect. ASTM E399: K_I = P/(B sqrt W) f(a/W) (:func:`astm_f`; f(0.5) = 9.659, within
 0.5 % of the f that ASTM E647's compliance fit gives through G = P^2/(2B) dC/da,
@@ -36,7 +36,7 @@ SCENE = Path(__file__).with_suffix(".toml")
 WIDTH, CRACK_TIP = 40.0, 20.0
 """W (mm, from the load line x = 0 to the back face) and the initial crack length a (mm)."""
 GAMMA = 0.073
-"""The specimen's G_c (kN/mm); the material around the holes is tougher (the scene file)."""
+"""The specimen's G_c (kN/mm), uniform (the scene file)."""
 
 
 def astm_f(ratio: float) -> float:
