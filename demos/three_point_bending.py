@@ -7,8 +7,8 @@ curve.
 small pads, the pads' faces named by bounding boxes) with the notch as an initial crack, in
 mm and kN. The top pad is pushed down by t mm between two supports. The crack grows from the
 notch tip (4, 0.4) straight up the symmetry line x = 4 while the force on the top pad falls.
-The crack model is AT2 without a split (the paper's), so the pads are toughened
-(three_point_bending.toml says why, and that issue #25 asks to remove them).
+The crack model is AT2 with Miehe's split in the hybrid formulation; only the pads are
+damage-free.
 
 What to expect. LEFM for this specimen (span S = 8, height W = 2, a/W = 0.2; Srawley's
 formula for S/W = 4, accurate to 0.5 %) gives K_I = 3.323 P, so a sharp crack starts to grow
@@ -50,7 +50,7 @@ def lefm_onset(scene: Scene) -> float:
     young = mu * (3 * lam + 2 * mu) / (lam + mu)
     nu = lam / (2 * (lam + mu))
     k_per_force = SPAN / HEIGHT ** 1.5 * srawley_f(NOTCH / HEIGHT)
-    gamma = 5e-4  # the beam's G_c (the pads are tougher, see the scene file)
+    gamma = 5e-4  # the beam's G_c (only the pads are tougher, see the scene file)
     return math.sqrt(gamma * young / (1 - nu ** 2)) / k_per_force
 
 
