@@ -24,7 +24,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 TIMEOUT = 180
-"""Seconds for one MPI run (they take 5-20 s; the rest is for a loaded machine)."""
+"""Seconds for one MPI run (they take 1.5-5 s on two cores; the rest is for a loaded
+machine)."""
 CG_RTOL = 1e-8
 """The MPI run solves u and z by CG to a relative residual of 1e-10 (the serial run by sparse
 Cholesky): a column may differ by the solver tolerance times a condition-number factor;
@@ -360,7 +361,7 @@ def test_a_checkpoint_of_an_mpi_run_continues_serially(tmp_path, killed_mpi_run,
     assert history["nv"] == serial["nv"] and history["n_adapt"][-1] == 2
 
 
-@pytest.mark.slow  # 6.6 s; the checkpoint is the same file whoever wrote it, and the other two
+@pytest.mark.slow  # 4 s; the checkpoint is the same file whoever wrote it, and the other two
 # restart tests read one written under MPI
 def test_a_killed_serial_run_restarts_under_mpi(tmp_path, mpiexec, mode3_serial):
     folder = tmp_path / "run"
