@@ -147,13 +147,14 @@ def documented_files() -> dict[str, re.Pattern]:
 
 @pytest.fixture(scope="module")
 def written_files(tmp_path_factory):
-    """The files a tiny `ngfrac run` and `ngfrac plot` write into a run folder."""
+    """The files a tiny `ngfrac run` and `ngfrac plot` write into a run folder (both run in
+    this process, :func:`ngfrac.cli.main`: the files are the same as from ``python -m ngfrac``,
+    without a new interpreter importing NGSolve twice; tests/io/test_cli.py runs those)."""
+    from ngfrac.cli import main
+
     out = tmp_path_factory.mktemp("docs") / "run"
-    env = {**os.environ, "NGFRAC_THREADS": "1"}
     for args in (["run", SLIT, "--out", str(out), *TINY], ["plot", str(out)]):
-        result = subprocess.run([sys.executable, "-m", "ngfrac", *args], capture_output=True,
-                                text=True, env=env)
-        assert result.returncode == 0, result.stderr
+        assert main(args) == 0, f"ngfrac {' '.join(args)} failed (its stderr is above)"
     return sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
 
 

@@ -1,13 +1,22 @@
-"""The command line: exit codes, one-line errors without traceback, outputs."""
+"""The command line: exit codes, one-line errors without traceback, outputs.
+
+Most commands run in this process (:func:`ngfrac_here`, ~0.05 s); those that only a new
+process shows run as ``python -m ngfrac`` (:func:`ngfrac`, ~0.9 s, most of it importing
+NGSolve): its exit status, nothing else on stderr, no crash (a run that segfaulted), a restart
+that knows only the folder."""
+import contextlib
+import logging
 import re
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
+import h5py
 import pytest
 
-from ngfrac import cli, runner
+from ngfrac import cli, load_scene, runner
 from ngfrac.geometry.domains import MeshingError, Rectangle
 from ngfrac.io.checkpoint import CheckpointError
 from ngfrac.io.hdf5 import ResultsError
@@ -29,8 +38,44 @@ def ngfrac(*args, cwd=None):
                           cwd=cwd)
 
 
-def test_check_valid_scene():
-    result = ngfrac("check", SLIT)
+@contextlib.contextmanager
+def _logging_and_warnings_as_in_a_new_process():
+    """Root logging unconfigured (``cli.main``'s ``basicConfig`` then writes to stderr, where
+    pytest's handlers would keep the records) and Python's default warning filters, recorded."""
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    root.handlers.clear()
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                             ResourceWarning):
+                warnings.simplefilter("ignore", category)
+            yield caught
+    finally:
+        root.handlers[:] = handlers
+        root.setLevel(level)
+
+
+def ngfrac_here(capfd, *args):
+    """``ngfrac ARGS`` in this process (:func:`ngfrac.cli.main`), returned as :func:`ngfrac`
+    returns it: the status main returns (or argparse exits with), stdout, and stderr with the
+    log records and the warnings a new process would print there. An exception that would be
+    a traceback raises here."""
+    capfd.readouterr()
+    with _logging_and_warnings_as_in_a_new_process() as caught:
+        try:
+            code = cli.main([str(arg) for arg in args])
+        except SystemExit as end:
+            code = end.code
+    out, err = capfd.readouterr()
+    err += "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line)
+                   for w in caught)
+    return subprocess.CompletedProcess(["ngfrac", *args], code, out, err)
+
+
+def test_check_valid_scene(capfd):
+    result = ngfrac_here(capfd, "check", SLIT)
     assert result.returncode == 0, result.stderr
     assert "is valid" in result.stdout
 
@@ -41,8 +86,8 @@ def test_check_valid_scene():
     ("loads.0.boundary=\"nowhere\"", "not a boundary"),
     ("time.t_end=\"soon\"", "must be a number"),
 ])
-def test_bad_scene_exits_2_with_one_line(override, fragment):
-    result = ngfrac("check", SLIT, "--set", override)
+def test_bad_scene_exits_2_with_one_line(override, fragment, capfd):
+    result = ngfrac_here(capfd, "check", SLIT, "--set", override)
     assert result.returncode == 2
     assert fragment in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
@@ -50,6 +95,7 @@ def test_bad_scene_exits_2_with_one_line(override, fragment):
 
 
 def test_missing_scene_file(tmp_path):
+    """In a new process: ``python -m ngfrac`` exits with main's status, without traceback."""
     result = ngfrac("run", str(tmp_path / "nope.toml"), "--out", str(tmp_path / "o"))
     assert result.returncode == 2 and "does not exist" in result.stderr
     assert "Traceback" not in result.stderr
@@ -57,12 +103,13 @@ def test_missing_scene_file(tmp_path):
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
-    """A finished run of the slit (QUICK, plots included) and its CompletedProcess."""
+    """A finished run of the slit (QUICK, plots included) and its CompletedProcess (a new
+    process: the exit status of a run that went well)."""
     out = tmp_path_factory.mktemp("quick") / "run"
     return out, ngfrac("run", SLIT, "--out", str(out), *QUICK)
 
 
-def test_run_writes_outputs_and_refuses_to_overwrite(quick_run):
+def test_run_writes_outputs_and_refuses_to_overwrite(quick_run, capfd):
     out, result = quick_run
     assert result.returncode == 0, result.stderr
     for name in ("history.csv", "scene.toml", "history.png", "crack.png", "vtk/fields.pvd"):
@@ -71,25 +118,35 @@ def test_run_writes_outputs_and_refuses_to_overwrite(quick_run):
     contract = "step,t,wall_s,nv,ndof,hmin,hmax,E_el,E_surf,E_total,crack_length,tip_x,tip_y".split(",")
     assert header[: len(contract)] == contract
     before = (out / "history.csv").read_text()
-    again = ngfrac("run", SLIT, "--out", str(out), *QUICK)
+    again = ngfrac_here(capfd, "run", SLIT, "--out", str(out), *QUICK)
     assert again.returncode == 2 and "--overwrite" in again.stderr
     assert (out / "history.csv").read_text() == before  # nothing lost
     # a run with --overwrite into it: tests/io/test_output_folder.py (what it keeps and removes)
 
 
-def test_restart_continues_a_killed_run_exactly(tmp_path):
-    """Run 6 steps whose last checkpoint is at 4 (as a run killed after step 6: a finished
-    run writes one at its end, so the step-4 checkpoint of a 4-step run of the scene is put in
-    its place); continue from it to 8 steps, compare with 8 straight."""
+def test_restart_continues_a_killed_run_exactly(tmp_path, capfd):
+    """A run of 6 steps killed after its last one (an error raised there: a finished run writes
+    a checkpoint at its end), its last checkpoint at step 4; ``ngfrac run --restart`` in a new
+    process (it knows only the folder) continues it to 8 steps: as 8 straight. The runs before
+    the restart are made in this process (they were three processes: the killed run was a
+    finished 6-step run given the step-4 checkpoint of a third, 4-step run)."""
     common = ["--set", "phase_field.epsilon=0.08", "--set", "geometry.mesh_size=0.04",
               "--set", "adaptivity.enabled=false", "--set", "output.checkpoint_every=4",
               "--no-progress", "--no-plots"]
     straight, broken = tmp_path / "straight", tmp_path / "broken"
-    assert ngfrac("run", SLIT, "--out", str(straight), "--set", "time.t_end=0.004", *common).returncode == 0
-    assert ngfrac("run", SLIT, "--out", str(broken), "--set", "time.t_end=0.003", *common).returncode == 0
-    early = tmp_path / "early"
-    assert ngfrac("run", SLIT, "--out", str(early), "--set", "time.t_end=0.002", *common).returncode == 0
-    shutil.copy(early / "checkpoint.h5", broken / "checkpoint.h5")  # rows 5 and 6 come after it
+    assert ngfrac_here(capfd, "run", SLIT, "--out", straight, "--set", "time.t_end=0.004",
+                       *common).returncode == 0
+    sets = [value for flag, value in zip(common, common[1:]) if flag == "--set"]
+
+    def kill(stepper):
+        if stepper.k == 6:  # its rows written, its checkpoints (step 4) too
+            raise RuntimeError("killed")
+
+    with pytest.raises(RuntimeError, match="killed"):
+        runner.run_scene(load_scene(SLIT, [*sets, "time.t_end=0.003"]), broken, plots=False,
+                         on_step=kill)
+    with h5py.File(broken / "checkpoint.h5", "r") as f:
+        assert int(f.attrs["k"]) == 4  # rows 5 and 6 come after it
     again = ngfrac("run", "--restart", str(broken), "--set", "time.t_end=0.004", *common[-2:])
     assert again.returncode == 0, again.stderr
     a = (straight / "history.csv").read_text().splitlines()
@@ -104,16 +161,18 @@ def test_restart_continues_a_killed_run_exactly(tmp_path):
             assert x == pytest.approx(y, rel=1e-9, abs=1e-14, nan_ok=True), (cols[i], x, y)
 
 
-def test_restart_without_checkpoint_is_a_clear_error(tmp_path):
-    result = ngfrac("run", "--restart", str(tmp_path))
+def test_restart_without_checkpoint_is_a_clear_error(tmp_path, capfd):
+    result = ngfrac_here(capfd, "run", "--restart", str(tmp_path))
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
 
 
 def test_plot_command(quick_run, tmp_path):
+    """In a new process: the exit status of ``python -m ngfrac plot`` (tests/io/
+    test_output_folder.py and tests/test_docs.py plot in theirs)."""
     assert quick_run[1].returncode == 0, quick_run[1].stderr
     out = tmp_path / "run"
-    shutil.copytree(quick_run[0], out)  # the other test reads the original
+    shutil.copytree(quick_run[0], out)  # the other tests read the original
     result = ngfrac("plot", str(out))
     assert result.returncode == 0, result.stderr
     assert (out / "plots" / "history.png").exists()
@@ -124,11 +183,12 @@ def test_plot_command(quick_run, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def earlier_run(tmp_path_factory):
-    """A finished run folder, with a file of the user's in it."""
+def earlier_run(tmp_path_factory, quick_run):
+    """A finished run folder, with a file of the user's in it: a copy of :func:`quick_run`'s
+    (its plots included; it was a run of its own, the same without plots)."""
+    assert quick_run[1].returncode == 0, quick_run[1].stderr
     out = tmp_path_factory.mktemp("earlier") / "run"
-    result = ngfrac("run", SLIT, "--out", str(out), *QUICK, "--no-plots")
-    assert result.returncode == 0, result.stderr
+    shutil.copytree(quick_run[0], out)
     (out / "my_notes.txt").write_text("mine")
     return out
 
@@ -160,7 +220,8 @@ def test_bad_input_is_refused_by_check_and_by_run_into_an_earlier_run(case, earl
 
 
 def test_repeated_crack_point_no_longer_segfaults(earlier_run, tmp_path):
-    """It was exit 139 and no message (Netgen, a line from a point to itself)."""
+    """It was exit 139 and no message (Netgen, a line from a point to itself): in a new
+    process, which a segfault ends."""
     before = snapshot(earlier_run)
     result = ngfrac("run", SLIT, "--out", str(earlier_run), "--overwrite", *QUICK,
                     "--set", "cracks.0.points=[[0.0, 0.5], [0.3, 0.5], [0.3, 0.5]]")
@@ -242,12 +303,12 @@ def test_run_warns_once_and_strict_writes_nothing(tmp_path, capfd):
     assert (tmp_path / "run" / "history.csv").exists()
 
 
-def test_progress_bar_counts_the_time_steps(tmp_path):
+def test_progress_bar_counts_the_time_steps(tmp_path, capfd):
     """The bar (the Progress writer) ends at the scene's last tick, on stderr."""
     overrides = [arg for arg in QUICK if arg != "--no-progress"]
-    result = ngfrac("run", SLIT, "--out", str(tmp_path / "run"), *overrides,
-                    "--set", "adaptivity.enabled=false", "--set", "discretization.order=1",
-                    "--no-plots")
+    result = ngfrac_here(capfd, "run", SLIT, "--out", str(tmp_path / "run"), *overrides,
+                         "--set", "adaptivity.enabled=false", "--set", "discretization.order=1",
+                         "--no-plots")
     assert result.returncode == 0, result.stderr
     assert re.search(r"mode3_slit: 100%.*\b4/4 \[", result.stderr), result.stderr
     assert "tip_x=" in result.stderr

@@ -1,19 +1,27 @@
 """Run folders: the manifest (--overwrite removes only ngfrac's files), run.json and the
-results.h5 metadata, restarts, read-only and missing folders, ngfrac --version."""
+results.h5 metadata, restarts, read-only and missing folders, ngfrac --version.
+
+Most commands run in this process (:func:`ngfrac_here`); a new process (:func:`ngfrac`, ~0.9
+s, most of it importing NGSolve) where it shows more: the run whose run.json records its
+command line and thread count, the restart that knows only the folder, and one refusal each
+of ``run`` and ``plot`` (the exit status, nothing else on stderr)."""
 import configparser
 import contextlib
 import datetime
 import importlib.metadata
 import json
+import logging
 import os
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import h5py
 import pytest
 
+from ngfrac import cli
 from ngfrac.io.output import Manifest, OutputError, git_revision, run_metadata
 from ngfrac.io.results import open_results
 
@@ -30,6 +38,43 @@ def ngfrac(*args):
     env = {**os.environ, "NGFRAC_THREADS": "1"}
     return subprocess.run([sys.executable, "-m", "ngfrac", *map(str, args)], capture_output=True,
                           text=True, env=env)
+
+
+@contextlib.contextmanager
+def _logging_and_warnings_as_in_a_new_process():
+    """Root logging unconfigured (``cli.main``'s ``basicConfig`` then writes to stderr, where
+    pytest's handlers would keep the records) and Python's default warning filters, recorded
+    (as in tests/io/test_cli.py)."""
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    root.handlers.clear()
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                             ResourceWarning):
+                warnings.simplefilter("ignore", category)
+            yield caught
+    finally:
+        root.handlers[:] = handlers
+        root.setLevel(level)
+
+
+def ngfrac_here(capfd, *args):
+    """``ngfrac ARGS`` in this process (:func:`ngfrac.cli.main`), returned as :func:`ngfrac`
+    returns it: the status main returns (or argparse exits with), stdout, and stderr with the
+    log records and the warnings a new process would print there. An exception that would be
+    a traceback raises here."""
+    capfd.readouterr()
+    with _logging_and_warnings_as_in_a_new_process() as caught:
+        try:
+            code = cli.main([str(arg) for arg in args])
+        except SystemExit as end:
+            code = end.code
+    out, err = capfd.readouterr()
+    err += "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line)
+                   for w in caught)
+    return subprocess.CompletedProcess(["ngfrac", *args], code, out, err)
 
 
 def assert_one_line_error(result, fragment):
@@ -61,11 +106,13 @@ def assert_untouched(state):
 
 @pytest.fixture(scope="module")
 def base_run(tmp_path_factory):
-    """One tiny run (with a checkpoint, results.h5, VTK, plots and `ngfrac plot`)."""
+    """One tiny run (with a checkpoint, results.h5, VTK, plots and `ngfrac plot`); the run in
+    a new process (run.json records its command line and NGFRAC_THREADS), the plot in this
+    one."""
     out = tmp_path_factory.mktemp("base") / "run"
     result = ngfrac("run", SLIT, "--out", out, *TINY)
     assert result.returncode == 0, result.stderr
-    assert ngfrac("plot", out).returncode == 0
+    assert cli.main(["plot", str(out)]) == 0
     return out
 
 
@@ -104,14 +151,14 @@ def read_only(folder):
 
 
 # -- version ----------------------------------------------------------------------------------
-def test_version_comes_from_the_package_metadata():
+def test_version_comes_from_the_package_metadata(capfd):
     import ngfrac as package
 
     setup = configparser.ConfigParser()
     setup.read(ROOT / "setup.cfg")
     version = setup["metadata"]["version"]
     assert importlib.metadata.version("ngfrac") == package.__version__ == version
-    result = ngfrac("--version")
+    result = ngfrac_here(capfd, "--version")
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith(f"ngfrac {version} (NGSolve ")
 
@@ -164,6 +211,7 @@ def test_metadata_without_git(monkeypatch):
 
 
 def test_restart_updates_the_scene_and_logs_itself(run_copy):
+    """In a new process: it knows only the folder, and run.json records its command line."""
     result = ngfrac("run", "--restart", run_copy, "--set", "time.t_end=0.003", "--no-progress",
                     "--no-plots")
     assert result.returncode == 0, result.stderr
@@ -190,11 +238,11 @@ def test_manifest_lists_every_file_written(base_run):
     assert set(manifest.entries) == written
 
 
-def test_overwrite_keeps_the_users_files(run_copy):
+def test_overwrite_keeps_the_users_files(run_copy, capfd):
     mine = user_files(run_copy)
     longer = {p.name for p in (run_copy / "vtk").glob("fields_*.vtu")}
-    result = ngfrac("run", SLIT, "--out", run_copy, *TINY, "--set", "time.t_end=0.001",
-                    "--overwrite", "--no-plots")
+    result = ngfrac_here(capfd, "run", SLIT, "--out", run_copy, *TINY,
+                         "--set", "time.t_end=0.001", "--overwrite", "--no-plots")
     assert result.returncode == 0, result.stderr
     assert_untouched(mine)
     shorter = {p.name for p in (run_copy / "vtk").glob("fields_*.vtu")}
@@ -206,6 +254,7 @@ def test_overwrite_keeps_the_users_files(run_copy):
 
 
 def test_without_overwrite_nothing_changes(run_copy):
+    """In a new process: the refusal is its exit status 2 and one line on stderr."""
     mine = user_files(run_copy)
     ours = state_of(p for p in run_copy.rglob("*") if p.is_file())
     result = ngfrac("run", SLIT, "--out", run_copy, *TINY)
@@ -214,28 +263,30 @@ def test_without_overwrite_nothing_changes(run_copy):
     assert_untouched(ours)
 
 
-def test_folder_of_an_older_run_without_manifest(run_copy):
+def test_folder_of_an_older_run_without_manifest(run_copy, capfd):
     """No manifest: ngfrac's names count as the earlier run's, everything else stays."""
     (run_copy / "manifest.json").unlink()
     for name in ("run.json", "crack_path.csv", "results.xdmf", "results_mesh_000.xdmf"):
         (run_copy / name).unlink()  # older runs wrote none of these
     mine = user_files(run_copy)
-    assert_one_line_error(ngfrac("run", SLIT, "--out", run_copy, *TINY), "--overwrite")
-    result = ngfrac("run", SLIT, "--out", run_copy, *TINY, "--overwrite", "--no-plots")
+    assert_one_line_error(ngfrac_here(capfd, "run", SLIT, "--out", run_copy, *TINY),
+                          "--overwrite")
+    result = ngfrac_here(capfd, "run", SLIT, "--out", run_copy, *TINY, "--overwrite",
+                         "--no-plots")
     assert result.returncode == 0, result.stderr
     assert_untouched(mine)
     assert not (run_copy / "plots" / "history.png").exists()
     assert "run.json" in Manifest.load(run_copy).entries
 
 
-def test_users_file_at_an_ngfrac_name_is_refused(run_copy):
+def test_users_file_at_an_ngfrac_name_is_refused(run_copy, capfd):
     """A results.h5 the manifest does not list is the user's: refused before anything goes."""
     manifest = Manifest.load(run_copy)
     manifest.entries.remove("results.h5")
     manifest.save()
     mine = state_of([run_copy / "results.h5"])
     history = (run_copy / "history.csv").read_text()
-    result = ngfrac("run", SLIT, "--out", run_copy, *TINY, "--overwrite")
+    result = ngfrac_here(capfd, "run", SLIT, "--out", run_copy, *TINY, "--overwrite")
     assert_one_line_error(result, "results.h5")
     assert_untouched(mine)
     assert (run_copy / "history.csv").read_text() == history
@@ -258,61 +309,63 @@ def test_writing_refuses_an_unlisted_file_and_forgets_unmade_ones(tmp_path):
 
 
 # -- unusable folders -------------------------------------------------------------------------
-def test_read_only_folder_is_one_line(tmp_path):
+def test_read_only_folder_is_one_line(tmp_path, capfd):
     out = tmp_path / "ro"
     out.mkdir()
     mine = user_files(out)
     with read_only(out):
-        result = ngfrac("run", SLIT, "--out", out, *TINY)
+        result = ngfrac_here(capfd, "run", SLIT, "--out", out, *TINY)
     assert_one_line_error(result, "cannot write")
     assert_untouched(mine)
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "plots", "vtk"]
 
 
-def test_overwrite_in_a_read_only_folder_removes_nothing(run_copy):
+def test_overwrite_in_a_read_only_folder_removes_nothing(run_copy, capfd):
     before = {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")}
     with read_only(run_copy):
-        result = ngfrac("run", SLIT, "--out", run_copy, *TINY, "--overwrite")
-        restart = ngfrac("run", "--restart", run_copy, "--set", "time.t_end=0.003", "--no-progress")
+        result = ngfrac_here(capfd, "run", SLIT, "--out", run_copy, *TINY, "--overwrite")
+        restart = ngfrac_here(capfd, "run", "--restart", run_copy, "--set", "time.t_end=0.003",
+                              "--no-progress")
     assert_one_line_error(result, "cannot write")
     assert_one_line_error(restart, "cannot write")
     assert {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")} == before
 
 
-def test_plot_into_a_read_only_run_folder(run_copy):
+def test_plot_into_a_read_only_run_folder(run_copy, capfd):
     shutil.rmtree(run_copy / "plots")
     manifest = Manifest.load(run_copy)
     manifest.entries = [e for e in manifest.entries if not e.startswith("plots/")]
     manifest.save()
     before = {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")}
     with read_only(run_copy):
-        result = ngfrac("plot", run_copy)
+        result = ngfrac_here(capfd, "plot", run_copy)
     assert_one_line_error(result, "cannot write")
     assert {p: p.stat().st_mtime_ns for p in run_copy.rglob("*")} == before
 
 
-def test_plot_keeps_users_plots_and_lists_its_own(run_copy):
+def test_plot_keeps_users_plots_and_lists_its_own(run_copy, capfd):
     mine = user_files(run_copy)
-    result = ngfrac("plot", run_copy)
+    result = ngfrac_here(capfd, "plot", run_copy)
     assert result.returncode == 0, result.stderr
     assert_untouched(mine)
     entries = Manifest.load(run_copy).entries
     assert "plots/history.png" in entries and "plots/sketch.png" not in entries
 
 
-def test_plot_of_a_missing_folder(tmp_path):
+def test_plot_of_a_missing_folder(tmp_path, capfd):
+    # the first in a new process: the refusal is its exit status 2 and one line on stderr
     assert_one_line_error(ngfrac("plot", tmp_path / "nowhere"), "does not exist")
     (tmp_path / "empty").mkdir()
-    assert_one_line_error(ngfrac("plot", tmp_path / "empty"), "not a run folder")
+    assert_one_line_error(ngfrac_here(capfd, "plot", tmp_path / "empty"), "not a run folder")
 
 
-def test_resolution_warnings_are_recorded_in_the_run_folder(tmp_path):
+def test_resolution_warnings_are_recorded_in_the_run_folder(tmp_path, capfd):
     """A vertex cap far below what the sizes need: the warning goes to stderr, run.json and
     results.h5 (the run itself goes on)."""
     out = tmp_path / "coarse"
-    result = ngfrac("run", SLIT, "--out", out, *TINY[:-1], "--set", "adaptivity.enabled=true",
-                    "--set", "adaptivity.max_vertices=100", "--set", "time.t_end=0.001",
-                    "--no-plots", "--no-progress")
+    result = ngfrac_here(capfd, "run", SLIT, "--out", out, *TINY[:-1],
+                         "--set", "adaptivity.enabled=true", "--set", "adaptivity.max_vertices=100",
+                         "--set", "time.t_end=0.001", "--no-plots", "--no-progress")
     assert result.returncode == 0, result.stderr
     assert "ngfrac: warning: adaptivity.max_vertices = 100" in result.stderr
     info = json.loads((out / "run.json").read_text())
