@@ -69,7 +69,9 @@ def test_short_adaptive_3d_run_respects_cap_and_bounds():
 
 def test_3d_adaptive_restart_continues_exactly(tmp_path):
     """Checkpoints hold 3D meshes: a run stopped after two steps and restarted ends with the
-    same history row as the uninterrupted run (mesh changes included)."""
+    same history row as the uninterrupted run. (No mesh changes in these four steps: 443
+    vertices throughout, n_adapt 0, measured in session 14; a restart across a mesh change is
+    tests/io/test_checkpoint.py's, in 2D.)"""
     from ngfrac.io.plotting import read_history
     from ngfrac.runner import run_scene
 
