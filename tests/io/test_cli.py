@@ -4,13 +4,10 @@ Most commands run in this process (:func:`ngfrac_here`, ~0.05 s); those that onl
 process shows run as ``python -m ngfrac`` (:func:`ngfrac`, ~0.9 s, most of it importing
 NGSolve): its exit status, nothing else on stderr, no crash (a run that segfaulted), a restart
 that knows only the folder."""
-import contextlib
-import logging
 import re
 import shutil
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import h5py
@@ -26,6 +23,7 @@ from ngfrac.solve.communicator import ParallelError
 from ngfrac.solve.u_problem import SolverError
 
 from ngfrac.testing.bad_inputs import ALL_CASES, bad_scene_file
+from ngfrac.testing.command_line import ngfrac_here
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIT = str(ROOT / "demos" / "mode3_slit.toml")
@@ -36,42 +34,6 @@ QUICK = ["--set", "phase_field.epsilon=0.08", "--set", "geometry.mesh_size=0.04"
 def ngfrac(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "ngfrac", *args], capture_output=True, text=True,
                           cwd=cwd)
-
-
-@contextlib.contextmanager
-def _logging_and_warnings_as_in_a_new_process():
-    """Root logging unconfigured (``cli.main``'s ``basicConfig`` then writes to stderr, where
-    pytest's handlers would keep the records) and Python's default warning filters, recorded."""
-    root = logging.getLogger()
-    handlers, level = root.handlers[:], root.level
-    root.handlers.clear()
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("default")
-            for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
-                             ResourceWarning):
-                warnings.simplefilter("ignore", category)
-            yield caught
-    finally:
-        root.handlers[:] = handlers
-        root.setLevel(level)
-
-
-def ngfrac_here(capfd, *args):
-    """``ngfrac ARGS`` in this process (:func:`ngfrac.cli.main`), returned as :func:`ngfrac`
-    returns it: the status main returns (or argparse exits with), stdout, and stderr with the
-    log records and the warnings a new process would print there. An exception that would be
-    a traceback raises here."""
-    capfd.readouterr()
-    with _logging_and_warnings_as_in_a_new_process() as caught:
-        try:
-            code = cli.main([str(arg) for arg in args])
-        except SystemExit as end:
-            code = end.code
-    out, err = capfd.readouterr()
-    err += "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line)
-                   for w in caught)
-    return subprocess.CompletedProcess(["ngfrac", *args], code, out, err)
 
 
 def test_check_valid_scene(capfd):
@@ -243,7 +205,6 @@ def test_meshing_failure_during_the_run_exits_3_in_one_line(tmp_path, monkeypatc
                      "--set", "adaptivity.enabled=false"])
     assert code == 3
     one_error_line(capfd.readouterr().err, r"Netgen could not mesh the rectangle .*; run ngfrac check")
-
 
 
 def _raising(error):

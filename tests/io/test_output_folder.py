@@ -10,12 +10,10 @@ import contextlib
 import datetime
 import importlib.metadata
 import json
-import logging
 import os
 import shutil
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import h5py
@@ -24,6 +22,7 @@ import pytest
 from ngfrac import cli
 from ngfrac.io.output import Manifest, OutputError, git_revision, run_metadata
 from ngfrac.io.results import open_results
+from ngfrac.testing.command_line import ngfrac_here
 
 ROOT = Path(__file__).resolve().parents[2]
 SLIT = str(ROOT / "demos" / "mode3_slit.toml")
@@ -38,43 +37,6 @@ def ngfrac(*args):
     env = {**os.environ, "NGFRAC_THREADS": "1"}
     return subprocess.run([sys.executable, "-m", "ngfrac", *map(str, args)], capture_output=True,
                           text=True, env=env)
-
-
-@contextlib.contextmanager
-def _logging_and_warnings_as_in_a_new_process():
-    """Root logging unconfigured (``cli.main``'s ``basicConfig`` then writes to stderr, where
-    pytest's handlers would keep the records) and Python's default warning filters, recorded
-    (as in tests/io/test_cli.py)."""
-    root = logging.getLogger()
-    handlers, level = root.handlers[:], root.level
-    root.handlers.clear()
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("default")
-            for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
-                             ResourceWarning):
-                warnings.simplefilter("ignore", category)
-            yield caught
-    finally:
-        root.handlers[:] = handlers
-        root.setLevel(level)
-
-
-def ngfrac_here(capfd, *args):
-    """``ngfrac ARGS`` in this process (:func:`ngfrac.cli.main`), returned as :func:`ngfrac`
-    returns it: the status main returns (or argparse exits with), stdout, and stderr with the
-    log records and the warnings a new process would print there. An exception that would be
-    a traceback raises here."""
-    capfd.readouterr()
-    with _logging_and_warnings_as_in_a_new_process() as caught:
-        try:
-            code = cli.main([str(arg) for arg in args])
-        except SystemExit as end:
-            code = end.code
-    out, err = capfd.readouterr()
-    err += "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line)
-                   for w in caught)
-    return subprocess.CompletedProcess(["ngfrac", *args], code, out, err)
 
 
 def assert_one_line_error(result, fragment):
