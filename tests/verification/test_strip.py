@@ -153,9 +153,9 @@ def test_at1_strip_onset_bracketed_within_5_percent(factor, grows):
     E_surf stays 1.071 (to the printed 1e-3) from step 25 on, +1e-5 over the second half; at
     1.05 the tip advances 0.041 (1 eps) and E_surf grows 0.060 over it (session 8, 80 steps;
     the session that wrote this test noted 0.047 and 0.07). With 60 steps (session 14, 20 %
-    less CPU): +4e-5 at 0.95; at 1.05 the tip advances 0.040 and E_surf grows 0.053. Thresholds: growth means more than
-    eps/4 of tip advance and more than gamma eps/4 of surface energy; arrest means less than
-    a tenth of that. (Before the obstacle solve, the projected z-step did not move the tip even at
+    less CPU): +4e-5 at 0.95; at 1.05 the tip advances 0.040 and E_surf grows 0.053.
+    Thresholds: growth means more than eps/4 of tip advance and more than gamma eps/4 of
+    surface energy; arrest means less than a tenth of that. (Before the obstacle solve, the projected z-step did not move the tip even at
     1.13 Delta_c.)
     """
     check_at1_bracket(0.04, factor, grows)
