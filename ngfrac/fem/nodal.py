@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 import ngsolve as ngs
 
+from .threads import meshing_threads
+
 
 def vertex_dofs_first(fes: ngs.FESpace) -> bool:
     """Whether a scalar H1 space numbers one dof per vertex first, in vertex order (NGSolve's
@@ -173,7 +175,7 @@ def _reference_beta(dim: int) -> float:
         from netgen.geom2d import unit_square as geometry
     else:
         from netgen.csg import unit_cube as geometry
-    mesh = ngs.Mesh(geometry.GenerateMesh(maxh=1.0))
+    mesh = ngs.Mesh(geometry.GenerateMesh(maxh=1.0, **meshing_threads()))
     fes = ngs.H1(mesh, order=2)
     vertices = np.array(mesh.ngmesh.Coordinates())[:, :dim]
     pairs = np.array([(e.vertices[0].nr, e.vertices[1].nr) for e in mesh.edges], dtype=int)

@@ -23,6 +23,11 @@ assemblies of a step go through a :class:`ThreadChooser`: per kind of
 kernel it uses the threads or one thread, whichever took less wall time lately, and tries the
 other again after 8, 16, ..., 512 calls. Assembly gives the same bits with any thread count,
 so the choice changes timings only.
+
+Netgen meshes volumes in a TaskManager of its own, on 4 threads unless its meshing
+parameters say otherwise, whatever NGSolve's thread count: :func:`meshing_threads` gives it the
+configured count, and :data:`MESHING_CHOOSER` picks threads or one thread per vertex made, as
+for assembly (the mesh is the same either way).
 """
 from __future__ import annotations
 
@@ -37,8 +42,9 @@ import ngsolve as ngs
 
 from .ranks import sum_over_ranks
 
-__all__ = ["ThreadChooser", "ThreadPolicy", "configured_threads", "integrate", "note_threads",
-           "single_thread", "threaded"]
+__all__ = ["ChooserCall", "MESHING_CHOOSER", "ThreadChooser", "ThreadPolicy",
+           "configured_threads", "integrate", "meshing_threads", "note_threads", "single_thread",
+           "threaded"]
 
 _configured: int | None = None
 """NGSolve's thread count as configured (:func:`configured_threads`)."""
@@ -64,6 +70,19 @@ def note_threads(n: int) -> None:
     """Record that NGSolve's thread count was set to ``n``."""
     global _configured
     _configured = int(n)
+
+
+def meshing_threads(use: bool = True) -> dict[str, Any]:
+    """Netgen meshing parameters that mesh on NGSolve's configured thread count.
+
+    Netgen meshes volumes (3D Delaunay, volume optimization) in a TaskManager of its own with
+    ``MeshingParameters.nthreads`` threads, 4 by default, whatever ``SetNumThreads`` or
+    NGFRAC_THREADS say; these keywords (for ``MeshingParameters`` or ``GenerateMesh``) make
+    it use the configured count, or one thread when ``use`` is false or one is configured.
+    The mesh is the same with any count (tests/mesh/test_3d_adaptive.py).
+    """
+    n = configured_threads() if use else 1
+    return {"parallel_meshing": n > 1, "nthreads": n}
 
 
 @contextmanager
@@ -102,24 +121,40 @@ class _Timings:
     next_trial: int = 0
 
 
+@dataclass
+class ChooserCall:
+    """One call of a :class:`ThreadChooser`: its decision, and the work done that its wall
+    time is divided by before calls are compared (e.g. the vertices Netgen made)."""
+
+    threaded: bool
+    """Whether this call runs with threads."""
+    work: float = 1.0
+
+
 class ThreadChooser:
     """Threads where they pay: per kind of kernel (a key), NGSolve's threads or one thread,
     whichever took less wall time lately.
 
     The first call of a key runs threaded and is not timed (a first assembly also builds the
-    matrix graph); the next two time each mode once; then the faster one runs, and the other
-    is tried again after ``interval`` calls, the interval doubling (8 to 512) while the choice
-    holds and starting again at 8 when it flips. A wall time is an exponential average (half
-    weight to the newest). With one configured thread nothing is entered.
+    matrix graph; ``warm_up=False`` leaves that out); the next two time each mode once; then
+    the faster one runs, and the other is tried again after ``interval`` calls, the interval
+    doubling (8 to 512) while the choice holds and starting again at 8 when it flips. A wall
+    time is an exponential average (half weight to the newest), per unit of the work the
+    caller reports (:class:`ChooserCall`; one unit unless told). With one configured thread
+    nothing is entered.
 
     Parameters
     ----------
     enter : callable, optional
-        The context of a threaded kernel (:func:`threaded`); replaceable for tests.
+        The context of a threaded kernel (:func:`threaded`); replaceable for tests, or
+        :func:`contextlib.nullcontext` for a kernel that takes the decision itself
+        (:attr:`ChooserCall.threaded`, e.g. Netgen's meshing threads).
     clock : callable, optional
         Seconds (:func:`time.perf_counter`).
     threads : callable, optional
         The configured thread count (:func:`configured_threads`).
+    warm_up : bool
+        Whether a key's first call runs threaded untimed.
     """
 
     FIRST_INTERVAL = 8
@@ -127,18 +162,18 @@ class ThreadChooser:
 
     def __init__(self, enter: Callable[[], AbstractContextManager] | None = None,
                  clock: Callable[[], float] = time.perf_counter,
-                 threads: Callable[[], int] | None = None) -> None:
+                 threads: Callable[[], int] | None = None, warm_up: bool = True) -> None:
         self.enter = threaded if enter is None else enter
+        self.warm_up = warm_up
         self.clock = clock
         self.threads = configured_threads if threads is None else threads
         self.timings: dict[str, _Timings] = {}
         self._lock = threading.Lock()
 
-    @staticmethod
-    def _plan(t: _Timings) -> tuple[bool, str]:
+    def _plan(self, t: _Timings) -> tuple[bool, str]:
         """Whether the next call runs threaded, and why: "warm-up" (not timed), "first" (a
         mode's first timing), "trial" (the slower mode tried again) or "best"."""
-        if t.calls == 1:
+        if t.calls == 1 and self.warm_up:
             return True, "warm-up"
         if math.isnan(t.single) or math.isnan(t.threaded):
             return math.isnan(t.threaded) and not math.isnan(t.single), "first"
@@ -148,20 +183,23 @@ class ThreadChooser:
         return best, "best"
 
     @contextmanager
-    def __call__(self, key: str) -> Iterator[None]:
-        """The context of one kernel of kind ``key``."""
+    def __call__(self, key: str) -> Iterator[ChooserCall]:
+        """The context of one kernel of kind ``key``; it gives the call's
+        :class:`ChooserCall`."""
+        call = ChooserCall(threaded=False)
         if self.threads() <= 1:
-            yield
+            yield call
             return
         with self._lock:
             t = self.timings.setdefault(key, _Timings())
             t.calls += 1
             use, why = self._plan(t)
             best_before = t.threaded <= t.single
+        call.threaded = use
         start = self.clock()
         with self.enter() if use else nullcontext():
-            yield
-        elapsed = self.clock() - start
+            yield call
+        elapsed = (self.clock() - start) / max(call.work, 1e-300)
         if why == "warm-up":
             return
         with self._lock:
@@ -241,6 +279,11 @@ class ThreadPolicy:
 
 SHARED_CHOOSER = ThreadChooser()
 """The chooser of kernels outside a stepper's policy (:func:`integrate`, transfers)."""
+
+MESHING_CHOOSER = ThreadChooser(enter=nullcontext, warm_up=False)
+"""Netgen's volume meshing on threads or on one (:func:`meshing_threads`), by wall time per
+vertex made: beside a busy process two meshing threads took 2.2x the time of one
+(docs/benchmarks.md, "Threads on a busy machine")."""
 
 
 def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,

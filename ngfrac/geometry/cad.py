@@ -23,6 +23,7 @@ from typing import Any, ClassVar, Iterable, Mapping, Sequence
 import numpy as np
 import ngsolve as ngs
 
+from ..fem.threads import meshing_threads
 from .domains import BOUNDARY_TOL, CRACK_BOUNDARY, MeshingError, crack_polygon_faces, generate_mesh
 
 __all__ = ["OccDomain", "BoundaryConflict", "EmptyShape", "UnreadableFile", "name_boundaries",
@@ -196,7 +197,7 @@ class OccDomain:
             Netgen failed; the message says what to change.
         """
         return generate_mesh(self.netgen_geometry(cracks), maxh, "the OCC shape",
-                             "change the cracks or the mesh size")
+                             "change the cracks or the mesh size", dim=self.dim)
 
     def curve(self, mesh: ngs.Mesh, order: int, cracks: Any = ()) -> None:
         """Curve ``mesh`` (a mesh of this domain with these cracks) to ``order``.
@@ -262,7 +263,8 @@ class OccDomain:
 
     def _contains_3d(self, points: np.ndarray, slack: float) -> np.ndarray:
         if self._locator is None:
-            self._locator = ngs.Mesh(self.netgen_geometry().GenerateMesh(maxh=self.diameter / 8))
+            self._locator = ngs.Mesh(self.netgen_geometry().GenerateMesh(
+                maxh=self.diameter / 8, **meshing_threads()))
         if not len(points):
             return np.zeros(0, dtype=bool)
         located = self._locator(points[:, 0], points[:, 1], points[:, 2])["nr"] >= 0

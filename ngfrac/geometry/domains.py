@@ -13,12 +13,14 @@ are :class:`ngfrac.geometry.cad.OccDomain`.
 from __future__ import annotations
 
 import math
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 import ngsolve as ngs
 
+from ..fem.threads import MESHING_CHOOSER, meshing_threads
 
 __all__ = ["CRACK_BOUNDARY", "BOUNDARY_TOL", "MeshingError", "Domain", "Rectangle", "Box",
            "domain_of", "netgen_geometry", "build_mesh", "crack_polygon_faces"]
@@ -41,18 +43,24 @@ class MeshingError(RuntimeError):
     """
 
 
-def generate_mesh(geometry: Any, maxh: float, what: str, fix: str) -> ngs.Mesh:
-    """Netgen's quasi-uniform mesh of ``geometry`` at ``maxh``; a Netgen failure is a
-    :class:`MeshingError` naming ``what`` was meshed and how to ``fix`` it."""
+def generate_mesh(geometry: Any, maxh: float, what: str, fix: str, dim: int = 2) -> ngs.Mesh:
+    """Netgen's quasi-uniform mesh of ``geometry`` (of dimension ``dim``) at ``maxh``; a
+    Netgen failure is a :class:`MeshingError` naming ``what`` was meshed and how to ``fix``
+    it. A volume is meshed on threads where they paid lately
+    (:data:`ngfrac.fem.threads.MESHING_CHOOSER`)."""
     if maxh <= 0:
         raise ValueError(f"maxh must be > 0, got {maxh}")
-    try:
-        ngmesh = geometry.GenerateMesh(maxh=maxh)
-    except MeshingError:
-        raise
-    except Exception as err:  # netgen raises plain Exceptions for bad geometries
-        raise MeshingError(f"Netgen could not mesh {what} with its cracks ({err}) at "
-                           f"maxh = {maxh:g}; {fix}") from None
+    with MESHING_CHOOSER("netgen 3d") if dim == 3 else nullcontext() as call:
+        try:
+            ngmesh = geometry.GenerateMesh(
+                maxh=maxh, **meshing_threads(call is not None and call.threaded))
+        except MeshingError:
+            raise
+        except Exception as err:  # netgen raises plain Exceptions for bad geometries
+            raise MeshingError(f"Netgen could not mesh {what} with its cracks ({err}) at "
+                               f"maxh = {maxh:g}; {fix}") from None
+        if call is not None:
+            call.work = len(ngmesh.Points())
     return ngs.Mesh(ngmesh)
 
 
@@ -210,7 +218,7 @@ class _AxisAligned:
         """
         return generate_mesh(self.netgen_geometry(cracks), maxh, f"the {self.kind}",
                              f"run ngfrac check on the scene, or change the {self.CRACK_WORDS} "
-                             "or the mesh size")
+                             "or the mesh size", dim=self.dim)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ import logging
 import math
 import time
 import warnings
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -36,6 +37,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
+from ..fem.threads import MESHING_CHOOSER, meshing_threads
 from ..fem.elements import ElementGeometry, edge_numbers
 from ..geometry.domains import Domain, MeshingError, domain_of
 from ..scene import Geometry
@@ -573,18 +575,25 @@ def generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
     """
     constants = constants or meshing_constants(points.shape[1])
     steps = constants.optimize_steps if optimize_steps is None else optimize_steps
-    mp = ngm.MeshingParameters(maxh=maxh, grading=grading,
-                               **{f"optsteps{constants.dim}d": steps})
     active = sizes < maxh  # Netgen meets maxh itself, without the size-ratio correction
     xyz = np.zeros((int(active.sum()), 3))
     xyz[:, : points.shape[1]] = points[active]
-    for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / constants.size_ratio).tolist()):
-        mp.RestrictH(x, y, z, h)
-    try:
-        return ngeo.GenerateMesh(mp=mp)
-    except Exception as err:  # netgen raises plain Exceptions
-        raise MeshingError(f"Netgen could not remesh ({err}) with maxh = {maxh:g} and sizes "
-                           f"down to {float(sizes.min()):g}; raise adaptivity.hmin") from None
+    # Netgen threads volume meshing only: 3D meshes on threads where they pay lately
+    with MESHING_CHOOSER("netgen 3d") if constants.dim == 3 else nullcontext() as call:
+        mp = ngm.MeshingParameters(maxh=maxh, grading=grading,
+                                   **meshing_threads(call is not None and call.threaded),
+                                   **{f"optsteps{constants.dim}d": steps})
+        for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / constants.size_ratio).tolist()):
+            mp.RestrictH(x, y, z, h)
+        try:
+            ngmesh = ngeo.GenerateMesh(mp=mp)
+        except Exception as err:  # netgen raises plain Exceptions
+            raise MeshingError(f"Netgen could not remesh ({err}) with maxh = {maxh:g} and "
+                               f"sizes down to {float(sizes.min()):g}; raise adaptivity.hmin"
+                               ) from None
+        if call is not None:
+            call.work = len(ngmesh.Points())
+    return ngmesh
 
 
 def voronoi_weights(points: np.ndarray, n_grid: int | None = None) -> np.ndarray:

@@ -109,3 +109,20 @@ def test_one_configured_thread_enters_nothing():
     chooser = ThreadChooser(enter=kernels.enter, clock=kernels.clock, threads=lambda: 1)
     kernels.run(chooser, 50)
     assert kernels.threaded_calls == 0 and chooser.uses_threads("u") is None
+
+
+def test_the_chooser_compares_time_per_unit_of_work_and_decides_for_a_caller():
+    """Netgen's meshing (MESHING_CHOOSER): no warm-up call, the caller reads the decision and
+    reports the vertices made. Threaded meshes that take twice as long as the one-thread ones
+    but have 4x the vertices are the faster mode per vertex."""
+    now, calls = [0.0], []
+    chooser = ThreadChooser(enter=contextlib.nullcontext, clock=lambda: now[0],
+                            threads=lambda: 2, warm_up=False)
+    for _ in range(20):
+        with chooser("mesh") as call:
+            calls.append(call.threaded)
+            work = 4000 if call.threaded else 1000
+            now[0] += 3e-4 * work / (2 if call.threaded else 1)  # 0.6 s against 0.3 s
+            call.work = work
+    assert calls[:2] == [False, True]  # the first call is timed: one thread, then threads
+    assert chooser.uses_threads("mesh") is True and sum(calls) >= 18

@@ -7,6 +7,7 @@ import pytest
 from ngfrac.physics.cracks import distance_to_polygons
 from ngfrac.geometry.domains import build_mesh, netgen_geometry
 from ngfrac.fem.elements import ElementGeometry
+from ngfrac.fem import threads
 from ngfrac.mesh.remesh import adapt_mesh
 from ngfrac.scene import Scene
 from ngfrac.solve.stepper import PhaseFieldStepper
@@ -30,20 +31,43 @@ def small_box(**adaptivity):
     })
 
 
-def test_adapt_mesh_in_3d_meets_the_cap_and_refines_at_the_crack():
-    scene = small_box()
+def adapted_box(scene):
+    """The box meshed at 0.08 and adapted toward the crack under an 800-vertex cap."""
     mesh = build_mesh(scene.geometry, 0.08, [CRACK])
     geom = ElementGeometry.of(mesh)
     # asks for ~100,000 vertices: h = 0.005 at the crack, growing by 0.3 per unit distance
     sizes = np.clip(0.005 + 0.3 * distance_to_polygons(geom.centroids, [CRACK]), 0.005, 0.08)
-    new = adapt_mesh(mesh, netgen_geometry(scene.geometry, [CRACK]), sizes, hmax=0.08,
-                     max_vertices=800)
+    return adapt_mesh(mesh, netgen_geometry(scene.geometry, [CRACK]), sizes, hmax=0.08,
+                      max_vertices=800)
+
+
+def test_adapt_mesh_in_3d_meets_the_cap_and_refines_at_the_crack():
+    scene = small_box()
+    new = adapted_box(scene)
     assert 400 < new.nv <= 800, new.nv  # the cap holds and is used
     fine = ElementGeometry.of(new)
     distance = distance_to_polygons(fine.centroids, [CRACK])
     near, far = fine.diameters[distance < 0.02], fine.diameters[distance > 0.15]
     assert np.median(near) < 0.6 * np.median(far), (np.median(near), np.median(far))
     assert set(new.GetBoundaries()) == {"left", "right", "bottom", "top", "back", "front", "crack"}
+
+
+def test_netgen_meshes_3d_alike_on_one_thread_and_on_four():
+    """Netgen meshes volumes on NGSolve's configured thread count (its own default was 4,
+    whatever NGFRAC_THREADS said: ngfrac.fem.threads.meshing_threads); the mesh is the same
+    vertex for vertex and element for element on one thread and on four."""
+    configured = threads.configured_threads()
+    meshes = []
+    try:
+        for n in (1, 4):
+            threads.note_threads(n)
+            assert threads.meshing_threads() == {"parallel_meshing": n > 1, "nthreads": n}
+            meshes.append(adapted_box(small_box()).ngmesh)
+    finally:
+        threads.note_threads(configured)
+    one, four = meshes
+    assert np.array_equal(np.array(one.Coordinates()), np.array(four.Coordinates()))
+    assert np.array_equal(one.Elements3D().NumPy()["nodes"], four.Elements3D().NumPy()["nodes"])
 
 
 def test_short_adaptive_3d_run_respects_cap_and_bounds():
