@@ -7,7 +7,7 @@ cores: NGFRAC_THREADS unset) and with ``NGFRAC_THREADS=1``, each on a quiet mach
 a busy neighbour (a Python loop on one core), and prints wall and CPU seconds (median of
 ``--repeat`` runs)::
 
-    python benchmarks/busy_neighbour.py [--repeat 3] [--ngfrac PATH]
+    python benchmarks/busy_neighbour.py [--repeat 3] [--ngfrac PATH] [--scene NAME ...]
 
 ``--ngfrac PATH`` runs the ngfrac of another checkout (``PYTHONPATH=PATH``), e.g. one of the
 commit before a change. Run it on an otherwise quiet machine.
@@ -32,6 +32,9 @@ SCENES = {
     "coarse strip": ("mode3_slit", ["cracks=[]", "adaptivity.enabled=false",
                                     "geometry.mesh_size=0.15", "time.t_end=0.05",
                                     "output.vtk_every=0"]),
+    # the 3D demo to t = 2.2: 55 adaptive steps, the crack from x = 0.3 to 0.55 across three
+    # mesh changes (~1,350 vertices), Netgen's volume meshing at each
+    "3D box": ("box3d", ["time.t_end=2.2", "output.vtk_every=0"]),
 }
 BUSY = [sys.executable, "-c", "while True: pass"]
 
@@ -63,11 +66,15 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--ngfrac", type=Path, help="checkout whose ngfrac to run")
+    parser.add_argument("--scene", action="append", choices=list(SCENES),
+                        help="only this scene (repeatable; default: all)")
     args = parser.parse_args()
     print(f"load before: {os.getloadavg()[0]:.2f}; ngfrac from {args.ngfrac or ROOT}")
     print(f"{'scene':14} {'threads':8} {'neighbour':9} {'wall s':>8} {'CPU s':>8}")
     with tempfile.TemporaryDirectory() as tmp:
         for name, (scene, overrides) in SCENES.items():
+            if args.scene and name not in args.scene:
+                continue
             for busy in (False, True):
                 neighbour = subprocess.Popen(BUSY) if busy else None
                 try:
