@@ -30,18 +30,7 @@ def one_thread():
         yield
 
 
-LONGEST_FIRST = ("tests/demos/test_demos.py", "tests/parallel/test_mpi.py",
-                 "tests/demos/test_specimens.py", "tests/verification/test_strip.py",
-                 "tests/test_docs.py")
-"""The files that take longest (20-70 s each on two workers; the run prints the slowest
-tests), run first: pytest-xdist (``--dist loadfile``) hands files to the workers in the
-order collected, and one of them starting last left a worker idle at the end (alphabetical
-order put tests/test_docs.py's Sphinx build and tests/verification/ last)."""
-
-
 def pytest_collection_modifyitems(config, items):
-    rank = {name: k for k, name in enumerate(LONGEST_FIRST)}
-    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))  # stable
     if config.getoption("--runslow"):
         return
     skip_slow = pytest.mark.skip(reason="slow study: run with --runslow")
