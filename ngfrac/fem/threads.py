@@ -116,6 +116,8 @@ class _Timings:
 
     threaded: float = math.nan
     single: float = math.nan
+    single_seconds: float = math.nan
+    """The last one-thread call's wall time, not divided by its work."""
     calls: int = 0
     interval: int = 8
     next_trial: int = 0
@@ -135,13 +137,16 @@ class ThreadChooser:
     """Threads where they pay: per kind of kernel (a key), NGSolve's threads or one thread,
     whichever took less wall time lately.
 
-    The first call of a key runs threaded and is not timed (a first assembly also builds the
-    matrix graph; ``warm_up=False`` leaves that out); the next two time each mode once; then
-    the faster one runs, and the other is tried again after ``interval`` calls, the interval
-    doubling (8 to 512) while the choice holds and starting again at 8 when it flips. A wall
-    time is an exponential average (half weight to the newest), per unit of the work the
-    caller reports (:class:`ChooserCall`; one unit unless told). With one configured thread
-    nothing is entered.
+    The first call of a key runs on one thread and is not timed (a first assembly also builds
+    the matrix graph; ``warm_up=False`` leaves that out); the next times one thread. A kernel
+    that took less than ``small`` seconds there stays on one thread (threads cannot pay for
+    their start, and beside a busy process one threaded call can cost a time slice of the
+    scheduler). Otherwise the next call times the threads; then the faster mode runs, and the
+    other is tried again after ``interval`` calls, the interval doubling (8 to 512) while the
+    choice holds and starting again at 8 when it flips. A wall time is an exponential average
+    (half weight to the newest), per unit of the work the caller reports
+    (:class:`ChooserCall`; one unit unless told). With one configured thread nothing is
+    entered.
 
     Parameters
     ----------
@@ -154,17 +159,25 @@ class ThreadChooser:
     threads : callable, optional
         The configured thread count (:func:`configured_threads`).
     warm_up : bool
-        Whether a key's first call runs threaded untimed.
+        Whether a key's first call runs untimed.
+    small : float
+        Seconds on one thread below which a kernel is not tried on threads
+        (:attr:`SMALL`).
     """
 
     FIRST_INTERVAL = 8
     MAX_INTERVAL = 512
+    SMALL = 1e-3
+    """A 2D P2 vector assembly of ~500 vertices takes 1 ms on one thread; below that two
+    threads gained nothing on a quiet machine (docs/benchmarks.md, section 14)."""
 
     def __init__(self, enter: Callable[[], AbstractContextManager] | None = None,
                  clock: Callable[[], float] = time.perf_counter,
-                 threads: Callable[[], int] | None = None, warm_up: bool = True) -> None:
+                 threads: Callable[[], int] | None = None, warm_up: bool = True,
+                 small: float = SMALL) -> None:
         self.enter = threaded if enter is None else enter
         self.warm_up = warm_up
+        self.small = small
         self.clock = clock
         self.threads = configured_threads if threads is None else threads
         self.timings: dict[str, _Timings] = {}
@@ -172,11 +185,16 @@ class ThreadChooser:
 
     def _plan(self, t: _Timings) -> tuple[bool, str]:
         """Whether the next call runs threaded, and why: "warm-up" (not timed), "first" (a
-        mode's first timing), "trial" (the slower mode tried again) or "best"."""
+        mode's first timing), "small" (too short for threads), "trial" (the slower mode tried
+        again) or "best"."""
         if t.calls == 1 and self.warm_up:
-            return True, "warm-up"
-        if math.isnan(t.single) or math.isnan(t.threaded):
-            return math.isnan(t.threaded) and not math.isnan(t.single), "first"
+            return False, "warm-up"
+        if math.isnan(t.single):
+            return False, "first"
+        if t.single_seconds < self.small:
+            return False, "small"
+        if math.isnan(t.threaded):
+            return True, "first"
         best = t.threaded <= t.single
         if t.calls >= t.next_trial:
             return not best, "trial"
@@ -199,10 +217,13 @@ class ThreadChooser:
         start = self.clock()
         with self.enter() if use else nullcontext():
             yield call
-        elapsed = (self.clock() - start) / max(call.work, 1e-300)
+        seconds = self.clock() - start
+        elapsed = seconds / max(call.work, 1e-300)
         if why == "warm-up":
             return
         with self._lock:
+            if not use:
+                t.single_seconds = seconds
             old = t.threaded if use else t.single
             new = elapsed if math.isnan(old) else 0.5 * (old + elapsed)
             if use:
@@ -217,8 +238,11 @@ class ThreadChooser:
                 t.next_trial = t.calls + t.interval
 
     def uses_threads(self, key: str) -> bool | None:
-        """Whether the kernel ``key`` runs threaded now (None before it was timed both ways)."""
+        """Whether the kernel ``key`` runs threaded now (None before it was timed both ways,
+        False while it is too short for threads)."""
         t = self.timings.get(key)
+        if t is not None and t.single_seconds < self.small:
+            return False
         if t is None or math.isnan(t.single) or math.isnan(t.threaded):
             return None
         return t.threaded <= t.single
