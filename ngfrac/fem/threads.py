@@ -167,9 +167,10 @@ class ThreadChooser:
 
     FIRST_INTERVAL = 8
     MAX_INTERVAL = 512
-    SMALL = 1e-3
-    """A 2D P2 vector assembly of ~500 vertices takes 1 ms on one thread; below that two
-    threads gained nothing on a quiet machine (docs/benchmarks.md, section 14)."""
+    SMALL = 5e-4
+    """Between a 2D P2 vector assembly of 136 vertices (0.2 ms on one thread: two threads
+    gained nothing on a quiet machine) and one of 511 (0.9 ms: 0.65-0.94 of the time on
+    two); ``benchmarks/assembly_threads.py``, docs/benchmarks.md section 14."""
 
     def __init__(self, enter: Callable[[], AbstractContextManager] | None = None,
                  clock: Callable[[], float] = time.perf_counter,

@@ -133,7 +133,7 @@ def test_the_chooser_compares_time_per_unit_of_work_and_decides_for_a_caller():
 def test_a_kernel_too_short_for_threads_is_tried_on_them_once_it_grows():
     """Below ThreadChooser.SMALL on one thread a kernel never enters the TaskManager; a mesh
     that grows it past that gets it timed on threads (and kept there if faster)."""
-    kernels = FakeKernels(threaded=0.0004, single=0.0005)
+    kernels = FakeKernels(threaded=0.0002, single=0.0003)
     chooser = ThreadChooser(enter=kernels.enter, clock=kernels.clock, threads=lambda: 2)
     kernels.run(chooser, 100)
     assert kernels.threaded_calls == 0 and chooser.uses_threads("u") is False
