@@ -15,12 +15,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import statistics
-import subprocess
 import sys
 import time
 
 import ngsolve as ngs
 from netgen.geom2d import unit_square
+
+from busy_neighbour import neighbour  # benchmarks/busy_neighbour.py
 
 
 def median_seconds(form: ngs.BilinearForm, threads: int) -> float:
@@ -38,9 +39,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--busy", action="store_true", help="with a busy process beside it")
     args = parser.parse_args()
-    neighbour = subprocess.Popen([sys.executable, "-c", "while True: pass"]) if args.busy else None
-    try:
-        time.sleep(0.3 if args.busy else 0.0)
+    with neighbour(args.busy):
         print(f"{'vertices':>8} {'1 thread ms':>12} {'2 threads ms':>13} {'ratio':>6}")
         for h in (0.2, 0.1, 0.05, 0.03, 0.02, 0.012):
             mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=h))
@@ -49,10 +48,6 @@ def main() -> int:
             form.Assemble()  # the matrix graph
             one, two = median_seconds(form, 1), median_seconds(form, 2)
             print(f"{mesh.nv:8d} {one * 1e3:12.3f} {two * 1e3:13.3f} {two / one:6.2f}", flush=True)
-    finally:
-        if neighbour is not None:
-            neighbour.kill()
-            neighbour.wait()
     return 0
 
 

@@ -15,6 +15,7 @@ commit before a change. Run it on an otherwise quiet machine.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import resource
 import statistics
@@ -37,6 +38,21 @@ SCENES = {
     "3D box": ("box3d", ["time.t_end=2.2", "output.vtk_every=0"]),
 }
 BUSY = [sys.executable, "-c", "while True: pass"]
+
+
+@contextlib.contextmanager
+def neighbour(busy: bool = True, settle: float = 0.5):
+    """A busy process (a Python loop on one core) for the enclosed code, when ``busy``; it
+    starts ``settle`` seconds before the code and is killed after it."""
+    process = subprocess.Popen(BUSY) if busy else None
+    try:
+        if busy:
+            time.sleep(settle)
+        yield
+    finally:
+        if process is not None:
+            process.kill()
+            process.wait()
 
 
 def run(scene: str, overrides: list[str], threads: str | None, out: Path,
@@ -76,9 +92,7 @@ def main() -> int:
             if args.scene and name not in args.scene:
                 continue
             for busy in (False, True):
-                neighbour = subprocess.Popen(BUSY) if busy else None
-                try:
-                    time.sleep(0.5 if busy else 0.0)
+                with neighbour(busy):
                     for threads in (None, "1"):
                         runs = [run(scene, overrides, threads, Path(tmp) / "run", args.ngfrac)
                                 for _ in range(args.repeat)]
@@ -86,10 +100,6 @@ def main() -> int:
                         cpu = statistics.median(c for _, c in runs)
                         print(f"{name:14} {threads or 'default':8} {'busy' if busy else 'none':9} "
                               f"{wall:8.2f} {cpu:8.2f}", flush=True)
-                finally:
-                    if neighbour is not None:
-                        neighbour.kill()
-                        neighbour.wait()
     return 0
 
 
