@@ -43,8 +43,8 @@ import ngsolve as ngs
 from .ranks import sum_over_ranks
 
 __all__ = ["ChooserCall", "MESHING_CHOOSER", "ThreadChooser", "ThreadPolicy",
-           "configured_threads", "integrate", "meshing_threads", "note_threads", "single_thread",
-           "threaded"]
+           "configured_threads", "integrate", "meshing_threads", "netgen_meshing", "note_threads",
+           "single_thread", "threaded"]
 
 _configured: int | None = None
 """NGSolve's thread count as configured (:func:`configured_threads`)."""
@@ -309,6 +309,19 @@ MESHING_CHOOSER = ThreadChooser(enter=nullcontext, warm_up=False)
 """Netgen's volume meshing on threads or on one (:func:`meshing_threads`), by wall time per
 vertex made: beside a busy process two meshing threads took 2.2x the time of one
 (docs/benchmarks.md, "Threads on a busy machine")."""
+
+
+@contextmanager
+def netgen_meshing(dim: int) -> Iterator[ChooserCall]:
+    """The context of one Netgen meshing of dimension ``dim``: its call's decision
+    (``meshing_threads(call.threaded)`` are the keywords to mesh with), and the caller sets
+    ``call.work`` to the vertices made. A volume is meshed through :data:`MESHING_CHOOSER`;
+    Netgen does not thread 2D meshing, which runs on one thread untimed."""
+    if dim != 3:
+        yield ChooserCall(threaded=False)
+        return
+    with MESHING_CHOOSER("netgen 3d") as call:
+        yield call
 
 
 def integrate(cf: Any, mesh: ngs.Mesh, order: int | None = None, vb: Any = ngs.VOL,

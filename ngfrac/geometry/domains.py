@@ -13,14 +13,13 @@ are :class:`ngfrac.geometry.cad.OccDomain`.
 from __future__ import annotations
 
 import math
-from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 import ngsolve as ngs
 
-from ..fem.threads import MESHING_CHOOSER, meshing_threads
+from ..fem.threads import meshing_threads, netgen_meshing
 
 __all__ = ["CRACK_BOUNDARY", "BOUNDARY_TOL", "MeshingError", "Domain", "Rectangle", "Box",
            "domain_of", "netgen_geometry", "build_mesh", "crack_polygon_faces"]
@@ -50,17 +49,15 @@ def generate_mesh(geometry: Any, maxh: float, what: str, fix: str, dim: int = 2)
     (:data:`ngfrac.fem.threads.MESHING_CHOOSER`)."""
     if maxh <= 0:
         raise ValueError(f"maxh must be > 0, got {maxh}")
-    with MESHING_CHOOSER("netgen 3d") if dim == 3 else nullcontext() as call:
+    with netgen_meshing(dim) as call:
         try:
-            ngmesh = geometry.GenerateMesh(
-                maxh=maxh, **meshing_threads(call is not None and call.threaded))
+            ngmesh = geometry.GenerateMesh(maxh=maxh, **meshing_threads(call.threaded))
         except MeshingError:
             raise
         except Exception as err:  # netgen raises plain Exceptions for bad geometries
             raise MeshingError(f"Netgen could not mesh {what} with its cracks ({err}) at "
                                f"maxh = {maxh:g}; {fix}") from None
-        if call is not None:
-            call.work = len(ngmesh.Points())
+        call.work = len(ngmesh.Points())
     return ngs.Mesh(ngmesh)
 
 

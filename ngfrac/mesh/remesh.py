@@ -26,7 +26,6 @@ import logging
 import math
 import time
 import warnings
-from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -37,8 +36,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
-from ..fem.threads import MESHING_CHOOSER, meshing_threads
 from ..fem.elements import ElementGeometry, edge_numbers
+from ..fem.threads import meshing_threads, netgen_meshing
 from ..geometry.domains import Domain, MeshingError, domain_of
 from ..scene import Geometry
 
@@ -578,10 +577,8 @@ def generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
     active = sizes < maxh  # Netgen meets maxh itself, without the size-ratio correction
     xyz = np.zeros((int(active.sum()), 3))
     xyz[:, : points.shape[1]] = points[active]
-    # Netgen threads volume meshing only: 3D meshes on threads where they pay lately
-    with MESHING_CHOOSER("netgen 3d") if constants.dim == 3 else nullcontext() as call:
-        mp = ngm.MeshingParameters(maxh=maxh, grading=grading,
-                                   **meshing_threads(call is not None and call.threaded),
+    with netgen_meshing(constants.dim) as call:
+        mp = ngm.MeshingParameters(maxh=maxh, grading=grading, **meshing_threads(call.threaded),
                                    **{f"optsteps{constants.dim}d": steps})
         for (x, y, z), h in zip(xyz.tolist(), (sizes[active] / constants.size_ratio).tolist()):
             mp.RestrictH(x, y, z, h)
@@ -591,8 +588,7 @@ def generate(ngeo: Any, points: np.ndarray, sizes: np.ndarray, *, maxh: float,
             raise MeshingError(f"Netgen could not remesh ({err}) with maxh = {maxh:g} and "
                                f"sizes down to {float(sizes.min()):g}; raise adaptivity.hmin"
                                ) from None
-        if call is not None:
-            call.work = len(ngmesh.Points())
+        call.work = len(ngmesh.Points())
     return ngmesh
 
 
