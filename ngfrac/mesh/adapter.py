@@ -387,15 +387,16 @@ class MeshAdapter:
         fields.nodes.assign(fields.z, new)
 
     def resolve_initial(self, fields: MeshFields, tip: Callable[[MeshFields], np.ndarray],
-                        initial_state: Callable[[ngs.Mesh], MeshFields],
+                        initial_z: Callable[[ngs.Mesh], MeshFields],
                         solves: Callable[[], AbstractContextManager] = nullcontext,
                         ) -> MeshFields:
         """Resolve z0 before the first step: :data:`INITIAL_PASSES` times a new mesh for the
-        current z, on which ``initial_state(mesh)`` sets z0 from its formula and solves u0."""
+        current z, on which ``initial_z(mesh)`` sets z0 from its formula (the meshes follow z
+        alone: the caller solves u0 on the last one)."""
         for _ in range(INITIAL_PASSES):
             with solves():
                 mesh, _ = self.new_mesh(fields.mesh, fields.nodes, fields.z, tip(fields))
-            fields = initial_state(mesh)
+            fields = initial_z(mesh)
         self.remember(fields.mesh, fields.nodes, fields.z_values(), tip(fields))
         return fields
 

@@ -420,11 +420,11 @@ class DistributedMeshAdapter(MeshAdapter):
         return new, self.adaptations[-1]
 
     def resolve_initial(self, fields: MeshFields, tip: Callable[[MeshFields], np.ndarray],
-                        initial_state: Callable[[ngs.Mesh], MeshFields],
+                        initial_z: Callable[[ngs.Mesh], MeshFields],
                         solves: Callable[[], AbstractContextManager] = nullcontext,
                         ) -> MeshFields:
         """:meth:`MeshAdapter.resolve_initial` for a distributed run: each new mesh made on
-        rank 0 from the gathered z0, distributed, and z0, u0 set on it by ``initial_state``."""
+        rank 0 from the gathered z0, distributed, and z0 set on it by ``initial_z``."""
         for _ in range(INITIAL_PASSES):
             at = tip(fields)
             self._gather(fields, ("z",))
@@ -433,7 +433,7 @@ class DistributedMeshAdapter(MeshAdapter):
                 root = self._root_fields
                 with solves():
                     mesh, _ = self.new_mesh(root.mesh, root.nodes, root.z, at)
-            fields = initial_state(self._distribute(mesh))
+            fields = initial_z(self._distribute(mesh))
         at = tip(fields)
         self._gather(fields, ("z",))
         if self.comm.is_root:

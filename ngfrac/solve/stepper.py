@@ -119,11 +119,13 @@ class PhaseFieldStepper:
             self.load_state(state)
             return
         size = self.adapter.sizes.hmax if self.adapter else scene.mesh_size
-        self._initial_state(mesh if mesh is not None else
-                            self.comm.distribute(lambda: self.domain.build_mesh(size, polylines)))
+        self._initial_z(mesh if mesh is not None else
+                        self.comm.distribute(lambda: self.domain.build_mesh(size, polylines)))
         if self.adapter is not None and mesh is None:
+            # the meshes of the initial passes follow z0 alone: u0 only on the last one
             self.fields = self.adapter.resolve_initial(self.fields, lambda f: self.tip(),
-                                                       self._initial_state, self.threads.solves)
+                                                       self._initial_z, self.threads.solves)
+        self._initial_u()
 
     @classmethod
     def from_state(cls, scene: Scene, state: StepperState) -> "PhaseFieldStepper":
@@ -155,21 +157,24 @@ class PhaseFieldStepper:
                                            self.u_problem.drive(u_drive), self.context, u_drive)
         return self.fields
 
-    def _initial_state(self, mesh: ngs.Mesh) -> MeshFields:
-        """Fields on ``mesh`` with z0 = the crack model's optimal profile of the distance to
-        the initial cracks at the nodes (AT2: exp(-dist/eps)) and u0 the elastic solution at
-        t = 0 (the u-sub-step with 1/dt = 0)."""
+    def _initial_z(self, mesh: ngs.Mesh) -> MeshFields:
+        """New fields on ``mesh`` with z0 = the crack model's optimal profile of the distance to
+        the initial cracks at the nodes (AT2: exp(-dist/eps)); u is zero."""
         f = self._rebuild(mesh)
         polylines = self.tracker.polylines
         if polylines:
             distance = distance_to_cracks(f.nodes.points, polylines)
             f.nodes.assign(f.z, self.crack_model.profile(distance, self.scene.phase_field.epsilon))
+        return f
+
+    def _initial_u(self) -> None:
+        """u0 = the elastic solution at t = 0 for z0 (the u-sub-step with 1/dt = 0), and its
+        reaction forces."""
         self.time.Set(0.0)
         with self.threads.step(), self.u_problem.static():
             self.u_problem.solve("0 (the initial state)")
-            f.u_prev.vec.data = f.u.vec
+            self.fields.u_prev.vec.data = self.fields.u.vec
             self.forces = reaction_columns(self.u_problem, self.scene.loads)
-        return f
 
     # -- state ------------------------------------------------------------------------------
     def state(self) -> StepperState:
