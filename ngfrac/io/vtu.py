@@ -127,7 +127,8 @@ def snapshot_arrays(mesh: ngs.Mesh, fields: Mapping[str, Any]
     Continuous GridFunctions (H1, VectorH1: u, z) are given at the vertices (their vertex
     dofs); every other field at each element's centroid, one evaluation of the field at all
     centroids (the element average for fields linear on each element, such as the stress of
-    P2 u).
+    P2 u). Each such field is compiled first (``CoefficientFunction.Compile``), which
+    evaluates a subexpression its components share once rather than once per component.
     """
     geometry = ElementGeometry.of(mesh)
     points, cells = geometry.coordinates, geometry.vertices
@@ -149,7 +150,7 @@ def snapshot_arrays(mesh: ngs.Mesh, fields: Mapping[str, Any]
             centre = (0.25, 0.25, 0.25) if mesh.dim == 3 else (1 / 3, 1 / 3)
             rule = ngs.IntegrationRule([centre], [1.0])
             centroids = mesh.MapToAllElements({element: rule}, ngs.VOL)
-        cf = ngs.CoefficientFunction(cf)
+        cf = ngs.CoefficientFunction(cf).Compile()
         values = np.asarray(cf(centroids), dtype=np.float64)
         cell_data[name] = values.reshape(len(cells), -1) if cf.dim > 1 else values.ravel()
     return points, cells, point_data, cell_data
