@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Mapping
 
 from ..physics.crack_models import CRACK_MODELS, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
+from ..fem.linear import U_SOLVERS
 from ..physics.loads import LOAD_KINDS  # noqa: F401 (re-exported: the values of loads[i].kind)
 from .build import build_crack_model, build_elastic_model
 from .coercion import (FREE, REQUIRED, Components, SceneError, Section,  # noqa: F401 (re-exported)
@@ -349,8 +350,9 @@ class Discretization(Section):
         require(1 <= self.order <= 6, s, "order", self.order, "must be an integer in 1..6")
         require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
                 "must be 1 or 2 (0 = min(order, 2))")
-        require(self.u_solver in ("sparsecholesky", "umfpack", "cg"), s, "u_solver",
-                self.u_solver, "choose 'sparsecholesky', 'umfpack' or 'cg' (with BDDC)")
+        require(self.u_solver in U_SOLVERS, s, "u_solver", self.u_solver,
+                "choose 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG preconditioned "
+                "with an earlier factorization) or 'cg' (with BDDC)")
         require(self.z_solver in ("cg", "sparsecholesky", "umfpack"), s, "z_solver",
                 self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
         require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
