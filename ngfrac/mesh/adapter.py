@@ -31,7 +31,8 @@ from .remesh import MESHING_3D, SizeFloor, VertexDensity, adapt_mesh, size_field
 from ..physics.crack_models import CrackModel
 from ..fem.nodal import LagrangeNodes
 from .fields import MeshFields
-from .transfer import crack_length, evaluate, locate, transfer, transfer_phase_field
+from .transfer import (assign_nodes, crack_length, evaluate, locate, transfer,
+                       transfer_phase_field)
 from ..scene import Scene
 from ..scene.build import crack_model_of
 
@@ -431,16 +432,19 @@ OPEN_LEVEL = 0.95
 def transfer_fields(old: MeshFields, new: MeshFields) -> None:
     """u and z of ``old`` onto ``new`` (u_prev = u), z clipped to [0, 1].
 
-    When u and z share their Lagrange nodes (a scalar u of z's order) the nodes are located in
-    the old mesh once and both are evaluated there; otherwise
-    :func:`~ngfrac.mesh.transfer.transfer_phase_field` and an interpolating ``Set`` for u.
+    u goes over at its Lagrange nodes in 3D (P1, P2: a ``Set`` there searches the old mesh for
+    every integration point, most of a 3D mesh change) and where it is scalar of z's order,
+    else by an interpolating ``Set`` (:mod:`ngfrac.mesh.transfer`). When u (or each of its
+    components) and z share their nodes, the nodes are located in the old mesh once and both
+    are evaluated there.
     """
-    if new.u.dim == 1 and new.fes_u.globalorder == new.fes_z.globalorder:
+    vector_3d = new.mesh.dim == 3 and new.u.dim > 1 and new.fes_u.globalorder in (1, 2)
+    if (new.u.dim == 1 or vector_3d) and new.fes_u.globalorder == new.fes_z.globalorder:
         located = locate(old.mesh, new.nodes.points)
         new.nodes.assign(new.z, np.clip(evaluate(old.z, located), 0.0, 1.0))
-        new.nodes.assign(new.u, evaluate(old.u, located))
+        assign_nodes(new.nodes, tuple(new.u.components) or (new.u,), old.u(located))
     else:
         z_new, _ = transfer_phase_field(old.z, old.z, new.fes_z)
         new.z.vec.data = z_new.vec
-        new.u.vec.data = transfer(old.u, new.fes_u, method="set").vec
+        new.u.vec.data = transfer(old.u, new.fes_u, method="nodes" if vector_3d else "set").vec
     new.u_prev.vec.data = new.u.vec

@@ -77,6 +77,36 @@ def test_transfer_of_u_is_exact_on_a_refinement_and_near_best_otherwise(order, m
 
 
 @pytest.mark.parametrize("order", [1, 2])
+def test_3d_vector_transfer_at_nodes_is_exact_on_a_refinement_and_near_best_otherwise(order):
+    # the transfer of u in 3D (ngfrac.mesh.adapter.transfer_fields): each component of a
+    # VectorH1 at its Lagrange nodes
+    from netgen.csg import unit_cube
+    field = ngs.CoefficientFunction((SMOOTH, ngs.sin(2 * ngs.z) * ngs.y, ngs.exp(ngs.x * ngs.z)))
+    mesh = ngs.Mesh(unit_cube.GenerateMesh(maxh=0.4))
+    u = ngs.GridFunction(ngs.VectorH1(mesh, order=order), "u")
+    u.Set(field)
+    fine = refined_copy(mesh)
+    nested = transfer(u, ngs.VectorH1(fine, order=order), "nodes")
+    assert abs(ngs.Integrate(ngs.InnerProduct(nested - u, nested - u), fine)) < 1e-24
+
+    other = ngs.Mesh(unit_cube.GenerateMesh(maxh=0.3))
+    fes = ngs.VectorH1(other, order=order)
+    moved = transfer(u, fes, "nodes")
+    assert moved.name == "u"
+
+    def l2_error(gf):
+        return abs(ngs.Integrate(ngs.InnerProduct(gf - u, gf - u), other, order=2 * order + 4)) ** 0.5
+
+    trial, test = fes.TnT()
+    mass = ngs.BilinearForm(ngs.InnerProduct(trial, test) * ngs.dx).Assemble()
+    rhs = ngs.LinearForm(ngs.InnerProduct(u, test) * ngs.dx(bonus_intorder=4)).Assemble()
+    best = ngs.GridFunction(fes)
+    best.vec.data = mass.mat.Inverse(inverse="sparsecholesky") * rhs.vec
+    # as the scalar test above: interpolation is within a small factor of the best (L2) fit
+    assert l2_error(moved) < 2.5 * l2_error(best), (l2_error(moved), l2_error(best))
+
+
+@pytest.mark.parametrize("order", [1, 2])
 def test_bounds_hold_at_every_node_after_transfer(order):
     rng = np.random.default_rng(order)
     mesh = build_mesh(SQUARE, 0.08)
