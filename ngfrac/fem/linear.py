@@ -24,6 +24,9 @@ from ngsolve.krylovspace import CGSolver
 
 U_SOLVERS = ("sparsecholesky", "umfpack", "cg", "reused_cholesky")
 """Values of ``discretization.u_solver``."""
+Z_SOLVERS = ("cg", "sparsecholesky", "umfpack", "reused_cholesky")
+"""Values of ``discretization.z_solver`` (``"cg"``: Jacobi-preconditioned, in
+:mod:`ngfrac.solve.z_system`)."""
 CG_TOL = 1e-10
 CG_MAXITER = 10000
 REUSE_MAXITER = 20

@@ -19,9 +19,9 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Mapping
 
+from ..fem.linear import U_SOLVERS, Z_SOLVERS
 from ..physics.crack_models import CRACK_MODELS, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
-from ..fem.linear import U_SOLVERS
 from ..physics.loads import LOAD_KINDS  # noqa: F401 (re-exported: the values of loads[i].kind)
 from .build import build_crack_model, build_elastic_model
 from .coercion import (FREE, REQUIRED, Components, SceneError, Section,  # noqa: F401 (re-exported)
@@ -353,8 +353,9 @@ class Discretization(Section):
         require(self.u_solver in U_SOLVERS, s, "u_solver", self.u_solver,
                 "choose 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG preconditioned "
                 "with an earlier factorization) or 'cg' (with BDDC)")
-        require(self.z_solver in ("cg", "sparsecholesky", "umfpack"), s, "z_solver",
-                self.z_solver, "choose 'cg', 'sparsecholesky' or 'umfpack'")
+        require(self.z_solver in Z_SOLVERS, s, "z_solver", self.z_solver,
+                "choose 'cg', 'sparsecholesky', 'umfpack' or 'reused_cholesky' (CG "
+                "preconditioned with an earlier factorization)")
         require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
                 "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
         require(self.z_update in Z_UPDATES, s, "z_update", self.z_update,

@@ -26,6 +26,7 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
+from ..fem.linear import ReusedCholesky, iterations as solver_iterations, update as update_inverse
 from ..fem.nodal import vertex_dofs_first
 from .obstacle import NodalObstacle
 from .u_problem import SolverError
@@ -260,7 +261,9 @@ class AssembledSystem:
 
     def solve_system(self, z_trial: ngs.GridFunction, step: int | str) -> int:
         """The assembled system solved into ``z_trial``: CG from z_old, or the direct solve
-        (its factorization updated in place from the second step on)."""
+        (its factorization updated in place from the second step on), or CG preconditioned
+        with an earlier factorization (``"reused_cholesky"``, :class:`ngfrac.fem.linear.ReusedCholesky`);
+        returns the CG iterations (0 for a direct solve)."""
         fes, z = self.fields.fes_z, self.fields.z
         if self.solver == "cg":
             z_trial.vec.data = z.vec  # z^{k-1} is a good initial guess
@@ -272,11 +275,13 @@ class AssembledSystem:
                                   "set discretization.z_solver = 'sparsecholesky'")
             return cg.iterations
         if self._inverse is None:
-            self._inverse = self.a_z.mat.Inverse(fes.FreeDofs(), inverse=self.solver)
+            self._inverse = (ReusedCholesky(self.a_z.mat, fes.FreeDofs())
+                             if self.solver == "reused_cholesky"
+                             else self.a_z.mat.Inverse(fes.FreeDofs(), inverse=self.solver))
         else:
-            self._inverse.Update()
+            update_inverse(self._inverse)
         z_trial.vec.data = self._inverse * self.rhs
-        return 0
+        return solver_iterations(self._inverse)
 
     def _solve_obstacle(self, z_trial: ngs.GridFunction) -> int:
         """The sub-step as min of its quadratic energy over z >= z_old at the nodes
