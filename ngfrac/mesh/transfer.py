@@ -58,7 +58,8 @@ def transfer(gf_old: ngs.GridFunction, fes_new: ngs.FESpace,
         ``"set"``: ``GridFunction.Set`` (local L2 projection, any space). ``"nodes"``:
         Lagrange interpolation at the nodes of a P1/P2 ``fes_new``, scalar (``H1``) or a
         ``VectorH1`` of such components: one point search per node instead of one per
-        integration point (2x faster in 2D, 20x in 3D: docs/benchmarks.md, section 16).
+        integration point (about 2x faster in 2D; a 3D mesh change's transfer 12-16x:
+        docs/benchmarks.md, section 16).
 
     Returns
     -------
