@@ -259,7 +259,7 @@ def check_box3d(history):
 
 def check_sneddon(history):
     # Sneddon's pressurized crack, V = 2 pi p l0^2 (1 - nu^2)/E with p = 1e-3 t. The crack is
-    # frozen (alpha2 = 1e7): z changes by < 1e-6. The volume is linear in p, so V/V_Sneddon is the
+    # frozen (the demo's alpha2 = 1e10): z changes by < 1e-6. The volume is linear in p, so V/V_Sneddon is the
     # same at every row. Measured (docs/theory.md, "Pressurized cracks"): 0.969 on the quick
     # mesh (eps/l0 = 0.2, h_crack = eps/4); 5 % is the demo's target, and the table shows the
     # quick value within it while finer epsilon at h = eps/4 falls below it.
