@@ -111,9 +111,16 @@ def u_inverse(form: ngs.BilinearForm, freedofs: ngs.BitArray, solver: str,
         if preconditioner is None:
             raise ValueError("u_solver = 'cg' needs the preconditioner registered before assembly")
         return CGSolver(form.mat, preconditioner.mat, tol=CG_TOL, maxiter=CG_MAXITER)
+    return factorized_inverse(form.mat, freedofs, solver)
+
+
+def factorized_inverse(mat: ngs.BaseMatrix, freedofs: ngs.BitArray, solver: str) -> Any:
+    """The inverse of ``mat`` from a sparse factorization: ``mat.Inverse`` with
+    ``"sparsecholesky"`` or ``"umfpack"``, :class:`ReusedCholesky` with ``"reused_cholesky"``
+    (:func:`update` after each assembly; the u- and the z-sub-step)."""
     if solver == "reused_cholesky":
-        return ReusedCholesky(form.mat, freedofs)
-    return form.mat.Inverse(freedofs, inverse=solver)
+        return ReusedCholesky(mat, freedofs)
+    return mat.Inverse(freedofs, inverse=solver)
 
 
 def update(inverse: Any) -> None:

@@ -26,7 +26,7 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
-from ..fem.linear import ReusedCholesky, iterations as solver_iterations, update as update_inverse
+from ..fem.linear import factorized_inverse, iterations as solver_iterations, update as update_inverse
 from ..fem.nodal import vertex_dofs_first
 from .obstacle import NodalObstacle
 from .u_problem import SolverError
@@ -275,9 +275,7 @@ class AssembledSystem:
                                   "set discretization.z_solver = 'sparsecholesky'")
             return cg.iterations
         if self._inverse is None:
-            self._inverse = (ReusedCholesky(self.a_z.mat, fes.FreeDofs())
-                             if self.solver == "reused_cholesky"
-                             else self.a_z.mat.Inverse(fes.FreeDofs(), inverse=self.solver))
+            self._inverse = factorized_inverse(self.a_z.mat, fes.FreeDofs(), self.solver)
         else:
             update_inverse(self._inverse)
         z_trial.vec.data = self._inverse * self.rhs
