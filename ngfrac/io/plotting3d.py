@@ -17,18 +17,6 @@ import ngsolve as ngs
 from ..fem.elements import ElementGeometry
 
 
-def sample_vertex_field(mesh: ngs.Mesh, vertex_values: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """The P1 interpolant of vertex values at (n, 3) points of the mesh (NaN outside)."""
-    gf = ngs.GridFunction(ngs.H1(mesh, order=1))
-    gf.vec.FV().NumPy()[:] = np.asarray(vertex_values, dtype=float)
-    located = mesh(*np.asarray(points, dtype=float).T)
-    inside = located["nr"] >= 0  # NGSolve raises on a point outside (a domain that is no box)
-    values = np.full(len(points), np.nan)
-    if inside.any():
-        values[inside] = np.asarray(gf(located[inside]), dtype=float).reshape(-1)
-    return values
-
-
 GRID_CHUNK = 4_000_000
 """Candidate grid points per chunk of :func:`sample_on_grid` (bounds its memory, ~0.5 GB)."""
 BARYCENTRIC_SLACK = 1e-10
@@ -40,10 +28,10 @@ def sample_on_grid(mesh: ngs.Mesh, vertex_values: np.ndarray,
                    axes: Sequence[np.ndarray]) -> np.ndarray:
     """The P1 interpolant of vertex values at the nodes of a tensor grid (NaN outside).
 
-    The same values as :func:`sample_vertex_field` at ``np.meshgrid(*axes, indexing="ij")``,
-    found element by element instead of locating each point in the mesh (one search per
-    point, which made most of a 3D run's plotting time: docs/benchmarks.md, section 16): the
-    grid points in each tetrahedron's bounding box are tested with its barycentric coordinates.
+    The values at ``np.meshgrid(*axes, indexing="ij")``, found element by element instead of
+    locating each point in the mesh (NGSolve's ``mesh(xs, ys, zs)``, one search per point,
+    which made most of a 3D run's plotting time: docs/benchmarks.md, section 16): the grid
+    points in each tetrahedron's bounding box are tested with its barycentric coordinates.
 
     Parameters
     ----------

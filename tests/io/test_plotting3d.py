@@ -1,13 +1,13 @@
 """The 3D plot's grid sampler (ngfrac.io.plotting3d.sample_on_grid) gives the P1 values that
-NGSolve's point location (sample_vertex_field) gives at every grid point, NaN outside the
-domain."""
+NGSolve's point location (located_values, the plot's earlier sampler) gives at every grid
+point, NaN outside the domain."""
 from __future__ import annotations
 
 import numpy as np
 import ngsolve as ngs
 from netgen.occ import Box, OCCGeometry, Pnt
 
-from ngfrac.io.plotting3d import sample_on_grid, sample_vertex_field
+from ngfrac.io.plotting3d import sample_on_grid
 
 ROUND_OFF = 1e-12
 INSET = 1e-9
@@ -15,6 +15,18 @@ INSET = 1e-9
 NGSOLVE_SLACK = 1e-4
 """How far outside an element (in barycentric coordinates) NGSolve's point location may
 evaluate it."""
+
+
+def located_values(mesh, vertex_values, points):
+    """The P1 interpolant of vertex values at (n, 3) points by NGSolve's point location (NaN
+    outside)."""
+    gf = ngs.GridFunction(ngs.H1(mesh, order=1))
+    gf.vec.FV().NumPy()[:] = vertex_values
+    located = mesh(*np.asarray(points, dtype=float).T)
+    inside = located["nr"] >= 0
+    values = np.full(len(points), np.nan)
+    values[inside] = np.asarray(gf(located[inside]), dtype=float).reshape(-1)
+    return values
 
 
 def test_grid_sampler_equals_point_location_inside_and_nan_outside():
@@ -26,7 +38,7 @@ def test_grid_sampler_equals_point_location_inside_and_nan_outside():
     axes = [np.clip(np.linspace(0.0, 1.0, n), INSET, 1 - INSET) for n in (9, 11, 5)]
     grid = sample_on_grid(mesh, values, axes)
     X, Y, Z = np.meshgrid(*axes, indexing="ij")
-    located = sample_vertex_field(mesh, values, np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]))
+    located = located_values(mesh, values, np.column_stack([X.ravel(), Y.ravel(), Z.ravel()]))
     located = located.reshape(grid.shape)
     notch = (X > 0.5 + INSET) & (Y > 0.5 + INSET)
     assert np.isnan(grid[notch]).all()
