@@ -22,6 +22,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -78,13 +79,24 @@ class NodeGraph:
             raise ValueError(f"joined = {joined!r}: must be one of {JOINED}")
         self.points = np.asarray(nodes.points, dtype=float)
         rows, cols = _joined_pairs(mesh, nodes, joined)
-        self.edges = np.unique(np.sort(np.column_stack([rows, cols]), axis=1), axis=0)
         n = len(self.points)
         lengths = np.linalg.norm(self.points[rows] - self.points[cols], axis=1)
         graph = sparse.coo_matrix((lengths, (rows, cols)), shape=(n, n)).tocsr()
         graph = graph.maximum(graph.T)  # symmetric
         self.graph = graph.tocsr()
         self.dim = mesh.dim
+        self.scale = float(np.ptp(self.points, axis=0).max())
+        """The largest extent of the nodes along an axis (the size of the domain)."""
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        """Each pair of neighbours once (m, 2), the smaller number first, in lexicographic
+        order: the upper triangle of :attr:`graph` (edge lengths are positive, so no pair is
+        missing from it)."""
+        upper = sparse.triu(self.graph, k=1).tocsr()
+        upper.sort_indices()
+        return np.column_stack([np.repeat(np.arange(upper.shape[0]), np.diff(upper.indptr)),
+                                upper.indices]).astype(np.int64)
 
     @property
     def n_nodes(self) -> int:
@@ -188,7 +200,9 @@ def _ridge(graph: sparse.csr_matrix, points: np.ndarray, z: np.ndarray, members:
     direction = _growth_direction(points, members, s, owner, neighbours)
     has_direction = np.any(direction != 0, axis=1)
     offset = np.take(points, neighbours, axis=0) - np.take(points, members[owner], axis=0)
-    offset /= np.linalg.norm(offset, axis=1)[:, None]
+    # the norms column by column: what np.linalg.norm(offset, axis=1) sums, in its order,
+    # without its strided reduction (2x faster)
+    offset /= np.sqrt(sum(offset[:, i] ** 2 for i in range(offset.shape[1])))[:, None]
     along = np.abs(np.einsum("ij,ij->i", offset, np.take(direction, owner, axis=0)))
     across = along <= ACROSS_COS
     higher = across & (z[neighbours] > z[members[owner]])
@@ -258,7 +272,7 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
         return not_grown(none)
     sub = graph.graph[cracked][:, cracked]
     n_components, labels = csgraph.connected_components(sub, directed=False)
-    seeds = _seeds(points, cracked, sub, cracks, nucleus)
+    seeds = _seeds(points, cracked, sub, cracks, nucleus, graph.scale)
     if seeds is None:
         return not_grown(none, n_zones=n_components)
     crack_labels = np.unique(labels[seeds])
@@ -301,14 +315,14 @@ def find_crack(graph: NodeGraph, z_values: np.ndarray, cracks: Sequence[Sequence
 
 
 def _seeds(points: np.ndarray, cracked: np.ndarray, sub: sparse.csr_matrix,
-           cracks: Sequence[Sequence[Sequence[float]]], nucleus: np.ndarray | None) -> np.ndarray | None:
+           cracks: Sequence[Sequence[Sequence[float]]], nucleus: np.ndarray | None,
+           scale: float) -> np.ndarray | None:
     """Mask over the ``cracked`` nodes of those the crack set grows from: the nodes on the
     initial cracks or, with none, the one nearest to ``nucleus``; None without either."""
     if cracks:
         distance = distance_to_cracks(points[cracked], cracks)
         # the nodes on the initial cracks (they are mesh edges/faces; on a mesh that does not
         # follow them, the nodes within half an element of them)
-        scale = float(np.ptp(points, axis=0).max())
         return distance <= max(1e-9 * scale, float(distance.min()) + 0.5 * float(np.median(sub.data)))
     if nucleus is not None:
         dim = points.shape[1]
