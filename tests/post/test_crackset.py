@@ -8,7 +8,7 @@ from netgen.geom2d import unit_square
 from netgen.occ import Box, OCCGeometry, Pnt
 
 from ngfrac.physics.cracks import distance_to_polygons, distance_to_polylines, optimal_profile
-from ngfrac.post.crackset import NodeGraph, find_crack
+from ngfrac.post.crackset import NodeGraph, _joined_pairs, find_crack
 from ngfrac.fem.nodal import LagrangeNodes
 
 EPS = 0.02
@@ -134,5 +134,10 @@ def test_node_graph_joins_by_element_or_by_sub_simplex(square):
         both = {tuple(e) for e in graph.edges}
         assert all(tuple(e) in both for e in lattice.edges)
     assert len(graph.edges) == graph.graph.nnz // 2
+    for joined, made in (("element", graph), ("sub-simplices", lattice)):
+        # the pairs each element lists, every pair once, smaller number first, sorted
+        rows, cols = _joined_pairs(mesh, nodes, joined)
+        listed = np.unique(np.sort(np.column_stack([rows, cols]), axis=1), axis=0)
+        np.testing.assert_array_equal(made.edges, listed)
     with pytest.raises(ValueError, match="joined"):
         NodeGraph(mesh, nodes, joined="faces")
