@@ -85,7 +85,7 @@ class NodeGraph:
         graph = graph.maximum(graph.T)  # symmetric
         self.graph = graph.tocsr()
         self.dim = mesh.dim
-        self.scale = float(np.ptp(self.points, axis=0).max())
+        self.scale = float(np.ptp(self.points, axis=0).max()) if n else 0.0
         """The largest extent of the nodes along an axis (the size of the domain)."""
 
     @cached_property
@@ -201,7 +201,7 @@ def _ridge(graph: sparse.csr_matrix, points: np.ndarray, z: np.ndarray, members:
     has_direction = np.any(direction != 0, axis=1)
     offset = np.take(points, neighbours, axis=0) - np.take(points, members[owner], axis=0)
     # the norms column by column: what np.linalg.norm(offset, axis=1) sums, in its order,
-    # without its strided reduction (2x faster)
+    # without its strided reduction
     offset /= np.sqrt(sum(offset[:, i] ** 2 for i in range(offset.shape[1])))[:, None]
     along = np.abs(np.einsum("ij,ij->i", offset, np.take(direction, owner, axis=0)))
     across = along <= ACROSS_COS
