@@ -26,9 +26,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent
 VENV = ROOT / ".venv"
 STAMP = VENV / ".ngfrac-setup-stamp"
-EXTRAS = "test,docs,mpi"
+EXTRAS = "test,docs,mpi,dask"
 """The extras installed into .venv: one environment serves every command (mpi: the
-MPI tests in tests/parallel run in CI too, not only where someone installed it)."""
+MPI tests in tests/parallel run in CI too, not only where someone installed it; dask: the
+tests of ngfrac study, tests/test_study.py)."""
 
 
 def venv_python() -> Path:

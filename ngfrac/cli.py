@@ -1,5 +1,6 @@
 """Command line: ``ngfrac run SCENE.toml --out DIR``, ``ngfrac run --restart DIR``,
-``ngfrac plot DIR`` and ``ngfrac check SCENE.toml``.
+``ngfrac plot DIR``, ``ngfrac check SCENE.toml`` and ``ngfrac study SCENE.toml --vary KEY=V1,V2
+--out DIR`` (:mod:`ngfrac.studies`; exit 1 when a run of the study failed).
 
 Bad input exits with status 2 and one line on stderr; no traceback. Resolution warnings
 (:func:`ngfrac.mesh.resolution.resolution_warnings`) are one line each on stderr; ``--strict`` makes
@@ -25,6 +26,7 @@ from .parallel.communicator import launched_rank
 from .solve.communicator import ParallelError
 from .scene import Scene, SceneError, load_scene
 from .solve.stepper import SolverError
+from .studies.engine import DaskMissing
 
 if TYPE_CHECKING:
     from .solve.records import StepRecord
@@ -114,6 +116,28 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("folder", help="a run folder written by ngfrac run")
     plot.add_argument("--times", type=float, nargs="*", default=None,
                       help="times of the phase-field pictures (default: first, middle, last snapshot)")
+    study = sub.add_parser("study", help="run a scene over several values of its keys (Dask), "
+                           "with a table of headline numbers and error bars")
+    study.add_argument("scene", help="scene file (TOML)")
+    study.add_argument("--out", required=True, help="study folder: runs/, study.csv, study.json, plots/")
+    study.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="run every value of KEY (repeatable: the product of the lists)")
+    study.add_argument("--zip", dest="zipped", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="lists of one length, paired value by value (repeatable)")
+    study.add_argument("--refine", action="append", default=[], metavar="KEY",
+                       help="a discretization key refined over --levels levels by --ratio "
+                       "(repeatable: refined together); adds Richardson estimates and GCIs")
+    study.add_argument("--ratio", type=float, default=2.0,
+                       help="refinement ratio of --refine (default 2: sizes halve per level)")
+    study.add_argument("--levels", type=int, default=3, help="refinement levels (default 3)")
+    study.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scene key in every run (repeatable)")
+    study.add_argument("--workers", type=int, default=None,
+                       help="processes of the local Dask cluster (default: the cores)")
+    study.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://host:8786) instead of a local cluster")
+    study.add_argument("--no-plots", action="store_true", help="skip plots/<key>.png")
+    study.add_argument("-v", "--verbose", action="store_true", help="log at INFO level")
     check = sub.add_parser("check", help="validate a scene file and exit")
     check.add_argument("scene")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -243,6 +267,30 @@ def _run_scene(args: argparse.Namespace, scene: Scene, out: Path) -> int:
     return 0
 
 
+def _study(args: argparse.Namespace) -> int:
+    """``ngfrac study``: every combination validated first (exit 2), then the runs; exit 1 if
+    any run failed."""
+    from .studies import plan_study, run_study
+
+    if args.workers is not None and args.workers < 1:
+        raise SceneError(f"--workers {args.workers}: give a positive number of processes")
+    if args.workers is not None and args.scheduler:
+        raise SceneError("--workers sizes a local cluster; leave it out with --scheduler")
+    _check_scene_path(args.scene)
+    plan = plan_study(args.scene, args.vary, args.zipped, args.overrides, args.refine,
+                      args.ratio, args.levels)
+    print(f"study of {args.scene}: {len(plan.runs)} runs into {args.out}", flush=True)
+
+    def progress(row: dict) -> None:
+        error = f": {row['error']}" if row.get("error") else ""
+        print(f"  {row['name']}: {row['status']} ({row['wall_s']:.1f} s){error}", flush=True)
+
+    result = run_study(plan, args.out, workers=args.workers, scheduler=args.scheduler,
+                       command=sys.argv, on_row=progress, plots=not args.no_plots)
+    print(result.summary())
+    return 1 if result.failed else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``ngfrac`` command."""
     args = build_parser().parse_args(argv)
@@ -251,6 +299,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "plot":
             return _plot(args)
+        if args.command == "study":
+            return _study(args)
         if args.command == "check":
             _check_scene_path(args.scene)
             scene = load_scene(args.scene, args.overrides)
@@ -259,7 +309,8 @@ def main(argv: list[str] | None = None) -> int:
                   f"model {scene.model.kind})")
             return 0
         return _run(args)
-    except (SceneError, OutputError, CheckpointError, ResultsError, ParallelError, _Strict) as err:
+    except (SceneError, OutputError, CheckpointError, ResultsError, ParallelError, _Strict,
+            DaskMissing) as err:
         return _fail(str(err))
     except (SolverError, MeshingError) as err:
         return _fail(str(err), EXIT_SOLVER)

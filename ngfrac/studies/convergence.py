@@ -24,7 +24,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from .scene import Scene, SceneError, apply_overrides
+from ..scene import Scene, SceneError, apply_overrides
 
 ErrorFunction = Callable[[Any, Any], float]
 """``f(result, reference) -> float``: one error of one run."""
@@ -52,7 +52,7 @@ class StudyRun:
 
 def run_all_steps(scene: Scene) -> StudyRun:
     """The default ``run=``: a :class:`~ngfrac.solve.stepper.PhaseFieldStepper` to the end time."""
-    from .solve.stepper import PhaseFieldStepper
+    from ..solve.stepper import PhaseFieldStepper
 
     stepper = PhaseFieldStepper(scene)
     records = [stepper.record()]
