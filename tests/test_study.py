@@ -171,8 +171,8 @@ def test_plan_names_products_and_zips():
     plan = plan_study(SLIT, vary=["phase_field.epsilon=0.08,0.1"],
                       zipped=["time.dt=1e-3,5e-4", "time.t_end=0.002,0.001"], overrides=SMALL)
     assert [run.name for run in plan.runs] == [
-        "epsilon=0.08_dt=1e-3_t_end=0.002", "epsilon=0.08_dt=5e-4_t_end=0.001",
-        "epsilon=0.1_dt=1e-3_t_end=0.002", "epsilon=0.1_dt=5e-4_t_end=0.001"]
+        "epsilon=0.08_dt=0.001_t_end=0.002", "epsilon=0.08_dt=0.0005_t_end=0.001",
+        "epsilon=0.1_dt=0.001_t_end=0.002", "epsilon=0.1_dt=0.0005_t_end=0.001"]
     assert plan.runs[3].values == {"phase_field.epsilon": 0.1, "time.dt": 5e-4,
                                    "time.t_end": 0.001}
     assert plan.runs[3].scene().time.dt == 5e-4
@@ -181,6 +181,11 @@ def test_plan_names_products_and_zips():
     sizes = [run.scene().geometry.mesh_size for run in refined.runs]
     caps = [run.scene().adaptivity.max_vertices for run in refined.runs]
     assert sizes == [0.04, 0.02, 0.01] and caps == [5000, 20000, 80000]  # h ~ N**(-1/2)
+    assert refined.runs[2].name == "mesh_size=0.01_max_vertices=80000"
+    thirds = plan_study(SLIT, refine=["adaptivity.hmin"], overrides=SMALL, ratio=3.0)
+    assert [run.values["adaptivity.hmin"] for run in thirds.runs] == pytest.approx(
+        [2e-3, 2e-3 / 3, 2e-3 / 9], rel=1e-11)  # written to 12 digits: 0.00075, not ...98
+    assert thirds.runs[1].name == "hmin=0.000666667"
     with pytest.raises(SceneError, match="run epsilon=0: "):
         plan_study(SLIT, vary=["phase_field.epsilon=0.1,0"])
 
@@ -226,6 +231,8 @@ def test_richardson_of_a_refined_slit_beats_its_finest_run(tmp_path, client):
     assert abs(extrapolated - fine) < abs(finest["crack_length"] - fine)
     assert abs(finest["crack_length"] - fine) <= gci
     assert 1.5 < finest["crack_length_order"] < 3.5  # P1: 2 expected, measured 2.3
+    levels = [row["crack_length"] for row in result.rows]
+    assert finest["crack_length_spread"] == max(levels) - min(levels)
     with (tmp_path / "study" / "study.csv").open() as f:
         header = next(csv.reader(f))
     assert {"crack_length_gci", "crack_length_order", "peak_Fz_top_estimate"} <= set(header)

@@ -307,14 +307,21 @@ def quantity_names(table: list[dict[str, Any]]) -> list[str]:
 
     names = list(QUANTITIES)
     for row in table:
-        names += [key for key in row if key.startswith("peak_") and key not in names]
+        names += [key for key in row if key.startswith("peak_") and key not in names
+                  and not key.endswith(RICHARDSON_COLUMNS)]
     return names
 
 
+RICHARDSON_COLUMNS = ("_extrapolated", "_order", "_gci", "_estimate", "_spread")
+"""The suffixes of the columns :func:`add_richardson` adds to a quantity's name."""
+
+
 def add_richardson(plan: StudyPlan, table: list[dict[str, Any]]) -> None:
-    """Add ``<q>_extrapolated``, ``<q>_order``, ``<q>_gci`` and ``<q>_estimate`` to the row of
-    the finest level of each group (the runs that differ only in the refinement level), for
-    every quantity ``q`` (:func:`ngfrac.studies.richardson.richardson`)."""
+    """Add ``<q>_extrapolated``, ``<q>_order``, ``<q>_gci``, ``<q>_estimate`` and
+    ``<q>_spread`` (the range of the three finest levels: a measured fact, not an error
+    estimate) to the row of the finest level of each group (the runs that differ only in the
+    refinement level), for every quantity ``q``
+    (:func:`ngfrac.studies.richardson.richardson`)."""
     groups: dict[tuple, list[dict[str, Any]]] = {}
     for row in table:
         key = tuple(json.dumps(row.get(k), sort_keys=True) for k in plan.grouping_keys)
@@ -327,11 +334,13 @@ def add_richardson(plan: StudyPlan, table: list[dict[str, Any]]) -> None:
                 finest[f"{name}_estimate"] = "runs unfinished"
             continue
         for name in quantity_names(table):
-            estimate = richardson([_float(row.get(name)) for row in members], plan.ratio or 2.0)
+            values = [_float(row.get(name)) for row in members]
+            estimate = richardson(values, plan.ratio or 2.0)
             finest[f"{name}_extrapolated"] = estimate.extrapolated
             finest[f"{name}_order"] = estimate.order
             finest[f"{name}_gci"] = estimate.gci
             finest[f"{name}_estimate"] = estimate.status
+            finest[f"{name}_spread"] = max(values[-3:]) - min(values[-3:])
 
 
 def _check_study_folder(out: Path, plan: StudyPlan) -> None:

@@ -138,7 +138,8 @@ def refinement_values(key: str, base: Any, ratio: float, levels: int, dim: int) 
                          "(refine a mesh size, a vertex cap, a time step or epsilon)")
     if isinstance(base, int):
         return [str(int(round(base * ratio ** (dim * level)))) for level in range(levels)]
-    return [repr(float(base) / ratio ** level) for level in range(levels)]
+    # 12 digits: 0.00075, not 0.0007499999999999998 (a change of 1e-16 relative)
+    return [repr(float(f"{float(base) / ratio ** level:.12g}")) for level in range(levels)]
 
 
 def _lookup(data: dict[str, Any], key: str) -> Any:
@@ -163,7 +164,16 @@ _UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
 
 
 def _label(value_text: str) -> str:
-    label = _UNSAFE.sub("_", value_text.strip().strip("\"'")).strip("_")
+    """A value as a part of a folder name: a float to 6 digits, other characters than letters,
+    digits and ``._+-`` as ``_``."""
+    text = value_text.strip()
+    try:
+        number = float(text)
+    except ValueError:
+        number = None
+    if number is not None and not text.lstrip("+-").isdigit():
+        text = f"{number:.6g}"
+    label = _UNSAFE.sub("_", text.strip("\"'")).strip("_")
     return label[:40] or "_"
 
 

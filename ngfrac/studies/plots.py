@@ -2,8 +2,9 @@
 
 Runs that differ in the other keys are separate lines (labelled by those values). In a
 refinement study the figure of a grouping key shows the finest level of each group with its
-GCI as an error bar and the Richardson-extrapolated value as an open marker; the figure of the
-refined key shows every level, the band of the finest level shaded.
+GCI as an error bar (where the estimate converged), the Richardson-extrapolated value as an
+open marker and the range of the group's levels as a grey bar; the figure of the refined key
+shows every level.
 """
 from __future__ import annotations
 
@@ -81,6 +82,14 @@ def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[
                 gci = [_finite(r.get(f"{name}_gci")) for r in members]
                 line = ax.errorbar(xs, ys, yerr=[0 if g != g else g for g in gci], marker="o",
                                    capsize=3, label=label or None)
+                if plan.refine_keys and not refined:  # the levels behind each point
+                    for x, r in zip(xs, members):
+                        levels = [_finite(o.get(name)) for o in finished
+                                  if all(o.get(k) == r.get(k) for k in plan.grouping_keys)]
+                        levels = [v for v in levels if math.isfinite(v)]
+                        if len(levels) > 1:
+                            ax.vlines(x, min(levels), max(levels), color="0.6", linewidth=6,
+                                      alpha=0.35, zorder=0)
                 extrapolated = [(x, _finite(r.get(f"{name}_extrapolated")))
                                 for x, r in zip(xs, members)]
                 extrapolated = [(x, e) for x, e in extrapolated if math.isfinite(e)]
@@ -89,7 +98,12 @@ def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[
                             markerfacecolor="none", color=line[0].get_color(),
                             label="extrapolated" if not label else None)
             if refined and numeric:
+                from matplotlib.ticker import NullFormatter
+
                 ax.set_xscale("log")
+                levels = sorted({_number(row.get(key)) for row in rows})
+                ax.set_xticks(levels, [f"{x:.3g}" for x in levels])
+                ax.xaxis.set_minor_formatter(NullFormatter())
             if not numeric:
                 ax.set_xticks(range(len(categories)), [json.loads(c) for c in categories],
                               rotation=20)
@@ -102,7 +116,8 @@ def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[
         if labels:
             fig.legend(handles, labels, loc="upper center", ncol=min(4, len(labels)),
                        fontsize="small", frameon=False)
-        title = "finest level; bars: GCI" if plan.refine_keys and not refined else ""
+        title = ("finest level; bars: GCI (where converged); grey: range of the levels"
+                 if plan.refine_keys and not refined else "")
         fig.suptitle(title, y=0.01, va="bottom", fontsize="small")
         fig.tight_layout(rect=(0, 0.03, 1, 0.93 if labels else 1))
         path = out / "plots" / f"{key}.png"
