@@ -146,6 +146,17 @@ def test_a_killed_worker_fails_its_run_only(tmp_path, client):
     assert outcomes["epsilon=0.1"]["error"].startswith("KilledWorker")
 
 
+def test_a_running_scheduler_takes_the_runs(tmp_path, client):
+    """``--scheduler ADDRESS``: the runs go to that scheduler's workers (here the fixture's)."""
+    import json
+
+    plan = plan_study(SLIT, vary=["phase_field.epsilon=0.08"], overrides=SMALL)
+    result = run_study(plan, tmp_path / "study", scheduler=client.scheduler.address, plots=False)
+    assert [row["status"] for row in result.rows] == ["finished"]
+    info = json.loads((tmp_path / "study" / "study.json").read_text())
+    assert info["scheduler"] == {"kind": "scheduler", "address": client.scheduler.address}
+
+
 @pytest.mark.parametrize("args, message", [
     (["--vary", "phase_field.epsilon"], "write KEY=V1,V2"),
     (["--vary", "phase_field.epsilon=0.1,,0.2"], "an empty value"),
@@ -157,6 +168,7 @@ def test_a_killed_worker_fails_its_run_only(tmp_path, client):
     (["--refine", "geometry.mesh_size", "--levels", "2"], "at least 3"),
     (["--refine", "geometry.kind"], "not a positive number"),
     ([], "nothing to vary"),
+    (["--vary", TWO, "--scheduler", "foo"], "--scheduler foo: cannot connect"),
 ])
 def test_bad_study_input_exits_2_with_one_line_before_any_run(tmp_path, capfd, args, message):
     out = tmp_path / "study"

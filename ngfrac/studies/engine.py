@@ -149,7 +149,7 @@ def study_client(workers: int | None = None, scheduler: str | None = None,
     if scheduler:
         try:
             connected = distributed.Client(scheduler, timeout=30)
-        except (OSError, TimeoutError) as err:
+        except (OSError, TimeoutError, ValueError) as err:  # ValueError: a malformed address
             raise OutputError(f"--scheduler {scheduler}: cannot connect ({_one_line(err)}); "
                               "start the scheduler first, or leave out --scheduler for a "
                               "local cluster") from None
@@ -223,8 +223,6 @@ def run_study(plan: StudyPlan, out_dir: str | Path, *, workers: int | None = Non
         rows[name].update(status=FINISHED, wall_s=_float(previous.get(name, {}).get("wall_s")))
         rows[name].update(run_quantities(runs_dir / name))
     due = [run for run in plan.runs if states[run.name] != "finished"]
-    out.mkdir(parents=True, exist_ok=True)
-    runs_dir.mkdir(exist_ok=True)
     info = {"format": STUDY_FORMAT, "format_version": 1, **run_metadata(command),
             "scene_file": str(plan.scene_path.resolve()), "keys": plan.keys,
             "overrides": list(plan.base_overrides),
@@ -234,6 +232,7 @@ def run_study(plan: StudyPlan, out_dir: str | Path, *, workers: int | None = Non
             "threads": 1}  # NGSolve threads of each run (execute_run), not of this process
     if due:
         with study_client(workers, scheduler, client) as (dask_client, described):
+            runs_dir.mkdir(parents=True, exist_ok=True)  # Dask there and reached: now write
             info["scheduler"] = described
             _write_json(out, info)
             for run in due:
