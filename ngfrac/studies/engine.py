@@ -240,8 +240,7 @@ def run_study(plan: StudyPlan, out_dir: str | Path, *, workers: int | None = Non
             _write(out, plan, rows)
             for name, outcome in _submit(dask_client, due, runs_dir):
                 rows[name].update(outcome)
-                rows[name].update(run_quantities(runs_dir / name)
-                                  if (runs_dir / name / "history.csv").is_file() else {})
+                rows[name].update(run_quantities(runs_dir / name))
                 _write(out, plan, rows)
                 if on_row is not None:
                     on_row(rows[name])

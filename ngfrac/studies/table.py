@@ -51,8 +51,10 @@ def _last_finite(values: Sequence[float]) -> float:
 
 def run_quantities(folder: Path) -> dict[str, float]:
     """The headline numbers of the run in ``folder`` (see the module's docstring)."""
-    history = read_history(folder / "history.csv")
     out = {name: math.nan for name in QUANTITIES}
+    if not (folder / "history.csv").is_file():
+        return out  # a run that failed before its first row
+    history = read_history(folder / "history.csv")
     if not history.get("t"):
         return out
     out["t_end"] = history["t"][-1]
