@@ -144,16 +144,18 @@ def iterations(inverse: Any) -> int:
     return int(inverse.iterations)
 
 
-class UOperator:
-    """The inverse of an assembled u-matrix, made at the first :meth:`factorize` and
-    numerically updated at the later ones (or CG with the registered BDDC).
+class SystemInverse:
+    """The inverse of an assembled matrix (the u- or the z-sub-step's), made at the first
+    :meth:`factorize` and numerically updated at the later ones (or CG with the registered
+    BDDC).
 
     Parameters
     ----------
     form : ngsolve.BilinearForm
     freedofs : ngsolve.BitArray
     solver : str
-        A ``discretization.u_solver``.
+        A ``discretization.u_solver`` or, but for ``"cg"`` (which the z-step runs itself, from
+        z_old), a ``discretization.z_solver``.
     preconditioner : optional
         :func:`register_preconditioner` of ``form`` (for ``"cg"``).
     """

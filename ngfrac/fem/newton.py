@@ -8,7 +8,7 @@ from typing import Any, Callable
 import numpy as np
 import ngsolve as ngs
 
-from .linear import UOperator, iterations as solver_iterations
+from .linear import SystemInverse, iterations as solver_iterations
 from .threads import integrate, threaded, single_thread
 
 __all__ = ["NewtonResult", "NewtonSolver"]
@@ -65,7 +65,7 @@ class NewtonSolver:
         self.freedofs, self.inverse, self.preconditioner = freedofs, inverse, preconditioner
         self._free = np.array(freedofs, dtype=bool)  # element by element: once, not per solve
         self.rtol, self.max_iterations = rtol, max_iterations
-        self._operator = UOperator(a, freedofs, inverse, preconditioner)
+        self._operator = SystemInverse(a, freedofs, inverse, preconditioner)
         self.last: NewtonResult | None = None
         """The result of the last :meth:`solve`."""
 

@@ -22,7 +22,7 @@ from ..physics.elastic import traction_of
 from ..fem.newton import NewtonResult, NewtonSolver
 from ..physics.splits import make_split, tangent_integrators
 from ..scene import Scene
-from ..fem.linear import UOperator, register_preconditioner
+from ..fem.linear import SystemInverse, register_preconditioner
 from .context import StepContext
 from ..fem.quadrature import dx_of_order
 from ..mesh.fields import MeshFields
@@ -82,7 +82,7 @@ class DisplacementProblem:
             self.a_u += stiffness * dx
         solver = context.comm.u_solver(disc.u_solver)  # MPI: CG with BDDC
         pre = register_preconditioner(self.a_u, solver)  # before any assembly
-        self.linear = UOperator(self.a_u, fes.FreeDofs(), solver, pre)
+        self.linear = SystemInverse(self.a_u, fes.FreeDofs(), solver, pre)
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()
                     if pf.alpha1 > 0 else None)
         self.body_force = model.body_force(scene.material, time)

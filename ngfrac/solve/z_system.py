@@ -26,7 +26,7 @@ import numpy as np
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
-from ..fem.linear import factorized_inverse, iterations as solver_iterations, update as update_inverse
+from ..fem.linear import SystemInverse
 from ..fem.nodal import vertex_dofs_first
 from .obstacle import NodalObstacle
 from .u_problem import SolverError
@@ -182,7 +182,7 @@ class AssembledSystem:
         self.rhs = fields.z.vec.CreateVector()
         """The right-hand side of the last sub-step."""
         self._ones = _constant_one(fields.fes_z, fields.z.vec)
-        self._inverse: Any = None
+        self._inverse: SystemInverse | None = None
         self._obstacle = NodalObstacle(fields.nodes) if forms.update == "obstacle" else None
 
     @property
@@ -275,11 +275,9 @@ class AssembledSystem:
                                   "set discretization.z_solver = 'sparsecholesky'")
             return cg.iterations
         if self._inverse is None:
-            self._inverse = factorized_inverse(self.a_z.mat, fes.FreeDofs(), self.solver)
-        else:
-            update_inverse(self._inverse)
-        z_trial.vec.data = self._inverse * self.rhs
-        return solver_iterations(self._inverse)
+            self._inverse = SystemInverse(self.a_z, fes.FreeDofs(), self.solver)
+        z_trial.vec.data = self._inverse.factorize() * self.rhs
+        return self._inverse.iterations()
 
     def _solve_obstacle(self, z_trial: ngs.GridFunction) -> int:
         """The sub-step as min of its quadratic energy over z >= z_old at the nodes

@@ -67,7 +67,7 @@ def test_the_z_solve_with_a_reused_factor_matches_the_direct_one():
     # CG to a relative residual of 1e-10 with a near-exact preconditioner, as for u above
     np.testing.assert_allclose(reused[:, :3], direct[:, :3], rtol=1e-9)
     np.testing.assert_allclose(reused[:, 3], direct[:, 3], rtol=0, atol=1e-12)  # the same tip
-    inverse = stepper.z_problem.system._inverse
+    inverse = stepper.z_problem.system._inverse.inverse  # the SystemInverse's operator
     assert isinstance(inverse, linear.ReusedCholesky) and inverse.factorizations < 20
 
 
