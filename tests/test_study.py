@@ -169,6 +169,7 @@ def test_a_running_scheduler_takes_the_runs(tmp_path, client):
     (["--refine", "geometry.kind"], "not a positive number"),
     ([], "nothing to vary"),
     (["--vary", TWO, "--scheduler", "foo"], "--scheduler foo: cannot connect"),
+    (["--vary", TWO, "--set", "output.checkpoint_every=0"], "output.checkpoint_every = 0"),
 ])
 def test_bad_study_input_exits_2_with_one_line_before_any_run(tmp_path, capfd, args, message):
     out = tmp_path / "study"

@@ -163,7 +163,10 @@ def study_client(workers: int | None = None, scheduler: str | None = None,
     with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                           "distributed.worker.daemon": False}):
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None,
+                                           # no dashboard; the scheduler's HTTP routes on
+                                           # a free port (8787 by default: two studies at
+                                           # once would collide)
+                                           dashboard_address=":0",
                                            scheduler_kwargs={"dashboard": False},
                                            silence_logs=logging.ERROR,
                                            env={"NGFRAC_THREADS": "1",

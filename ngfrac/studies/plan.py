@@ -7,7 +7,8 @@ setting (:func:`refinement_values`). Values are TOML literals as for ``--set`` (
 strings); a comma inside brackets or quotes does not split (``--vary 'loads.1.value=["0","t"],
 ["0","2*t"]'``).
 
-Every combination is validated (:meth:`ngfrac.scene.Scene.from_dict`) before anything runs:
+Every combination is validated (:meth:`ngfrac.scene.Scene.from_dict`, and
+``output.checkpoint_every`` > 0: a study resumes by checkpoints) before anything runs:
 :func:`plan_study` raises :class:`~ngfrac.scene.SceneError` with one line naming the run and
 the problem.
 """
@@ -276,6 +277,10 @@ def _validated(scene_path: Path, base_data: dict[str, Any], texts: list[str], na
         scene = Scene.from_dict(data, name=scene_path.stem)
     except SceneError as err:
         raise SceneError(f"run {name}: {err}") from None
+    if scene.output.checkpoint_every < 1:
+        raise SceneError(f"run {name}: output.checkpoint_every = 0, but a study knows a "
+                         "finished run and continues an unfinished one by its checkpoint; "
+                         "give a positive value (the default is 50)")
     values = {}
     for text in texts:
         path, value = parse_override(text)

@@ -36,11 +36,7 @@ def _finite(value: Any) -> float:
 
 def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[Path]:
     """Write ``out/plots/<key>.png`` for every varied key; returns the files written."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    from ..io.plotting import new_figure  # Agg, outside pyplot: the session's backend stays
     from .engine import FINISHED, quantity_names
 
     finished = [row for row in table if row.get("status") == FINISHED]
@@ -62,8 +58,8 @@ def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[
             continue
         columns = min(3, len(quantities))
         lines = math.ceil(len(quantities) / columns)
-        fig, axes = plt.subplots(lines, columns, figsize=(4.2 * columns, 3.3 * lines),
-                                 squeeze=False)
+        fig = new_figure(figsize=(4.2 * columns, 3.3 * lines))
+        axes = fig.subplots(lines, columns, squeeze=False)
         others = [k for k in (plan.grouping_keys if plan.refine_keys else plan.keys) if k != key]
         numeric = all(_number(row.get(key)) is not None for row in rows)
         categories = list(dict.fromkeys(json.dumps(row.get(key)) for row in rows))
@@ -122,6 +118,5 @@ def plot_study(out: Path, plan: StudyPlan, table: list[dict[str, Any]]) -> list[
         fig.tight_layout(rect=(0, 0.03, 1, 0.93 if labels else 1))
         path = out / "plots" / f"{key}.png"
         fig.savefig(path, dpi=100)
-        plt.close(fig)
         written.append(path)
     return written
