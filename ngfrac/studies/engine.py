@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator
 
 from ..io.output import OutputError, atomic_write_text, run_metadata
-from ..scene import Scene, SceneError
+from ..scene import Scene
 from .plan import PlannedRun, StudyPlan
 from .richardson import richardson
 from .table import FIXED_COLUMNS, read_table, run_quantities, write_table
