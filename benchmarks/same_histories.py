@@ -34,7 +34,8 @@ DEMOS = {
                      "time.adaptive=false"],
     "mode3_slit_at1": QUICK + ["time.dt=2e-3"],  # AT1: the obstacle z-step
     "sens_amor": QUICK + ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=2e-4",
-                          "time.t_end=1.2e-2", "time.adaptive=false", "material.split=amor"],
+                          "time.t_end=1.2e-2", "time.adaptive=false", "material.split=amor",
+                          "material.split_mode=full"],  # the full split's Newton u-step
     "plate_hole": QUICK + ["phase_field.epsilon=0.015", "discretization.order=1",
                            "time.dt=1e-4", "time.t_end=1.2e-2", "time.adaptive=false",
                            "adaptivity.max_vertices=3000"],  # a CAD (OCC) domain

@@ -129,6 +129,19 @@ def measure_kink_both_ways(stepper: PhaseFieldStepper, scene: Scene, history: di
     return measured, path, from_history
 
 
+def slit_notch(scene: Scene) -> tuple[list[list[float]], list[list[float]]]:
+    """The notch of a specimen cut out of an ``occ`` rectangle as a thin slit (SENT, SENS):
+    ``(crack, box)``, the slit's centre line from the left edge ``[[x, y], [x, y]]`` and the
+    outer rectangle ``[[x0, y0], [x1, y1]]`` (the first shape and the first cut rectangle)."""
+    shapes = scene.geometry.shapes
+    cuts = [s for s in shapes if s.op == "cut" and s.type == "rectangle"]
+    if not shapes or shapes[0].type != "rectangle" or not cuts:
+        raise ValueError(f"{scene.name}: the notch is not a cut rectangle in a rectangle")
+    (x0, y0), (w, h) = shapes[0].corner, shapes[0].size
+    (cx, cy), (cw, ch) = cuts[0].corner, cuts[0].size
+    return [[cx, cy + ch / 2], [cx + cw, cy + ch / 2]], [[x0, y0], [x0 + w, y0 + h]]
+
+
 def plot_force_displacement(u: np.ndarray, force: np.ndarray, png: Path, title: str,
                             label: tuple[str, str], estimate: tuple[float, float] | None = None,
                             curve: str = "phase field") -> Path:

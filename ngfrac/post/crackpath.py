@@ -11,7 +11,8 @@ path points between two radii (a few epsilon beyond the tip, outside the initial
 measured from the direction of the initial crack's last segment, counter-clockwise positive.
 
 A reference LEFM solution (:func:`sharp_crack_solution`) cuts the first initial crack of a scene
-open (a slit from the left edge) and solves linear elasticity on a mesh graded at its tip;
+(or a given one) open (a slit from the left edge) and solves linear elasticity on a mesh
+graded at its tip;
 its K_I, K_II come from the crack-face displacement jump (:func:`stress_intensity_from_jump`),
 and :func:`griffith_onset` turns G into the load at which a sharp crack starts to grow.
 
@@ -33,7 +34,7 @@ import numpy as np
 if TYPE_CHECKING:
     import ngsolve as ngs
 
-    from ..scene import Geometry, Scene
+    from ..scene import Scene
 
 __all__ = ["CrackPath", "tip_and_direction", "ridge_path", "connected_part", "final_ridge",
            "crack_path_rows", "history_path", "fit_direction",
@@ -290,13 +291,19 @@ def mts_kink_angle(k1: float, k2: float) -> float:
 
 
 def measure_kink(stepper: Any, rmin: float, rmax: float, n_radii: int = 25,
-                 level: float = 0.5) -> tuple[float, CrackPath]:
+                 level: float = 0.5, *,
+                 crack: Sequence[Sequence[float]] | None = None) -> tuple[float, CrackPath]:
     """The kink angle of a stepper's current crack from the ridge of z.
 
-    Uses the first initial crack of the scene; arcs at ``n_radii`` radii from ``rmin`` to
-    ``rmax``. Returns the angle in degrees and the ridge path.
+    Measured from the tip of ``crack`` (the initial crack's points; default: the scene's first
+    ``[[cracks]]``, give it for a notch cut out of the geometry); arcs at ``n_radii`` radii
+    from ``rmin`` to ``rmax``. Returns the angle in degrees and the ridge path.
     """
-    origin, reference = tip_and_direction(stepper.scene.cracks[0].points)
+    if crack is None:
+        if not stepper.scene.cracks:
+            raise ValueError("the scene has no [[cracks]]: give the initial crack as crack=...")
+        crack = stepper.scene.cracks[0].points
+    origin, reference = tip_and_direction(crack)
     path = ridge_path(stepper.mesh, stepper.z, origin, reference,
                       np.linspace(rmin, rmax, n_radii), level=level)
     return kink_angle(path, rmin, rmax), path
@@ -312,9 +319,10 @@ def deviation_from_line(path: CrackPath, angle: float) -> np.ndarray:
     return direction[0] * offsets[:, 1] - direction[1] * offsets[:, 0]
 
 
-def slit_mesh(geometry: Geometry, crack: Sequence[Sequence[float]], h_tip: float = 1e-3,
-              opening: float = 1e-6) -> ngs.Mesh:
-    """A mesh of the rectangle with a straight crack from its left edge cut open.
+def slit_mesh(box: Sequence[Sequence[float]], crack: Sequence[Sequence[float]],
+              h_tip: float = 1e-3, opening: float = 1e-6) -> ngs.Mesh:
+    """A mesh of the rectangle ``box`` = [[x0, y0], [x1, y1]] with a straight crack from its
+    left edge cut open.
 
     The faces (boundary ``crack``) meet at the tip and are ``2 opening`` apart at the mouth, a
     wedge too thin to matter; elements are graded to ``h_tip`` at the tip (at most 0.3 times
@@ -323,8 +331,7 @@ def slit_mesh(geometry: Geometry, crack: Sequence[Sequence[float]], h_tip: float
     import ngsolve as ngs
     from netgen.geom2d import SplineGeometry
 
-    x0, y0 = geometry.origin
-    x1, y1 = x0 + geometry.width, y0 + geometry.height
+    (x0, y0), (x1, y1) = (tuple(float(c) for c in corner) for corner in box)
     mouth, tip = np.asarray(crack[0], dtype=float), np.asarray(crack[-1], dtype=float)
     if len(crack) != 2 or abs(mouth[0] - x0) > 1e-12 or not y0 < mouth[1] < y1:
         raise ValueError("slit_mesh handles one straight crack from the left edge")
@@ -333,7 +340,7 @@ def slit_mesh(geometry: Geometry, crack: Sequence[Sequence[float]], h_tip: float
                (x0, mouth[1] - opening)]
     points = [geo.AppendPoint(*p) for p in outline]
     names = ["bottom", "right", "top", "left", "crack", "crack", "left"]
-    coarse = min(geometry.width, geometry.height) / 20
+    coarse = min(x1 - x0, y1 - y0) / 20
     for i, name in enumerate(names):
         geo.Append(["line", points[i], points[(i + 1) % len(points)]], bc=name,
                    maxh=min(coarse, 0.01) if name == "crack" else coarse)
@@ -400,11 +407,16 @@ def _residual_forces(model: Any, fes: Any, loads: Sequence[Any], residual: Any,
 
 
 def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: float = 1e-3,
-                         fit_range: tuple[float, float] = (0.005, 0.05)) -> SharpCrack:
+                         fit_range: tuple[float, float] = (0.005, 0.05), *,
+                         crack: Sequence[Sequence[float]] | None = None,
+                         box: Sequence[Sequence[float]] | None = None) -> SharpCrack:
     """Linear elasticity (no phase field) with the scene's loads at time ``t`` on
     :func:`slit_mesh`; plane strain or plane stress.
 
-    K_I, K_II come from :func:`stress_intensity_from_jump` with the jump between
+    The sharp crack is ``crack`` (two points, from the left edge), by default the scene's
+    first ``[[cracks]]``; the rectangle is ``box`` = [[x0, y0], [x1, y1]], by default the
+    scene's rectangle geometry. Give both for a scene whose notch is cut out of an ``occ``
+    geometry. K_I, K_II come from :func:`stress_intensity_from_jump` with the jump between
     ``fit_range`` behind the tip. For loads linear in t, K and the forces scale with t and
     G and the energy with t^2.
     """
@@ -418,11 +430,21 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     if not all(load.is_dirichlet for load in scene.loads) or scene.phase_field.pressurized:
         raise ValueError("sharp_crack_solution takes displacement loads only (no tractions, "
                          "pressures or crack pressure)")
-    crack = scene.cracks[0].points
-    size = max(scene.geometry.width, scene.geometry.height)
+    if crack is None:
+        if not scene.cracks:
+            raise ValueError("the scene has no [[cracks]]: give the sharp crack as crack=[[x, y], "
+                             "[x, y]] (and the rectangle as box=[[x0, y0], [x1, y1]])")
+        crack = scene.cracks[0].points
+    if box is None:
+        g = scene.geometry
+        if g.kind != "rectangle":
+            raise ValueError(f"geometry.kind = {g.kind!r} is not a rectangle: give the rectangle "
+                             "as box=[[x0, y0], [x1, y1]]")
+        box = (g.origin, (g.origin[0] + g.width, g.origin[1] + g.height))
+    size = max(box[1][0] - box[0][0], box[1][1] - box[0][1])
     for opening in (1e-6 * size, 1e-5 * size, 1e-4 * size):  # Netgen fails on some thin wedges
         try:
-            mesh = slit_mesh(scene.geometry, crack, h_tip, opening)
+            mesh = slit_mesh(box, crack, h_tip, opening)
             break
         except Exception as err:  # netgen raises plain Exceptions
             failure = err
@@ -462,16 +484,19 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     return SharpCrack(K_I=k1, K_II=k2, G=float(G), energy=float(energy), reactions=reactions)
 
 
-def griffith_onset(scene: Scene, force: str, h_core: float | None = None) -> dict[str, float]:
+def griffith_onset(scene: Scene, force: str, h_core: float | None = None, *,
+                   crack: Sequence[Sequence[float]] | None = None,
+                   box: Sequence[Sequence[float]] | None = None) -> dict[str, float]:
     """Where the scene's sharp crack starts to grow by Griffith: t_c with G(t_c) = gamma.
 
     For loads linear in t, ``G(t) = G1 t^2`` and the reaction ``F(t) = F1 t`` (G1, F1 from
     :func:`sharp_crack_solution` at t = 1, ``force`` a key of its reactions, e.g. "Fy_top").
     Also for ``gamma_eff = gamma (1 + h_core/(2 epsilon))``, the toughness of a band whose core
     is one element of size h_core wide (default: the adaptive core size max(hmin, epsilon/10),
-    or the uniform mesh size). Returns t_c, F_c, t_c_eff, F_c_eff, G1, F1, K_I, K_II, kink_deg.
+    or the uniform mesh size). ``crack`` and ``box`` as for :func:`sharp_crack_solution`.
+    Returns t_c, F_c, t_c_eff, F_c_eff, G1, F1, K_I, K_II, kink_deg.
     """
-    sharp = sharp_crack_solution(scene, t=1.0)
+    sharp = sharp_crack_solution(scene, t=1.0, crack=crack, box=box)
     gamma = scene.material.gamma.value()
     eps = scene.phase_field.epsilon
     if h_core is None:

@@ -9,6 +9,7 @@ from ngfrac.scene import Scene, apply_overrides, read_scene_data
 
 ROOT = Path(__file__).resolve().parents[2]
 DEMOS = ROOT / "demos"
+BENCHMARK_SCENES = ROOT / "benchmarks" / "scenes"
 
 QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_every=0",
          "adaptivity.enabled=false"]
@@ -17,6 +18,11 @@ QUICK = ["phase_field.epsilon=0.04", "geometry.mesh_size=0.02", "output.vtk_ever
 def demo_data(name: str = "mode3_slit") -> dict[str, Any]:
     """Raw TOML data of a demo scene."""
     return read_scene_data(DEMOS / f"{name}.toml")
+
+
+def benchmark_scene_data(name: str) -> dict[str, Any]:
+    """Raw TOML data of a scene in benchmarks/scenes (``sent_band``: SENT with a z0 band)."""
+    return read_scene_data(BENCHMARK_SCENES / f"{name}.toml")
 
 
 def scene_from(data: dict[str, Any], *overrides: str) -> Scene:

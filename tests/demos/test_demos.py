@@ -19,7 +19,7 @@ QUICK_EXTRA = {
     "sent": ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3",
              "time.adaptive=false"],
     "sens": ["phase_field.epsilon=0.03", "discretization.order=1", "time.dt=2e-4",
-             "time.t_end=1.6e-2", "time.adaptive=false"],
+             "time.t_end=1.8e-2", "time.adaptive=false"],
     # CAD plate with a hole, no initial crack: the demo's epsilon (0.03 is a third of the
     # hole's radius: the band covers the hole), P1, steps of 1e-4 to 4e-4 mm, a tip margin of
     # 8 epsilon (a new mesh after 4 epsilon of growth). Remeshing was half of the run: 42 mesh
@@ -184,12 +184,12 @@ def check_mode12_stripes(history):
 
 
 def check_sent(history):
-    # Griffith with the LEFM G of a sharp notch: growth starts at F = 0.646 kN (gamma) to
-    # 0.662 kN (the band's gamma (1 + h/(2 eps))), and under displacement control the force
-    # then falls. The phase field peaks within 15% of that (the band's core still carries some
-    # load; AT2 damages the ligament before the peak): quick run 0.652 kN at u = 6.6e-3 mm
-    # (full run: 0.641 kN at 5.06e-3 mm).
-    # The crack runs along the notch line.
+    # Griffith with the LEFM G of the sharp notch: growth starts at F = 0.646 kN (gamma) to
+    # 0.662 kN (the discrete crack's gamma (1 + h/(2 eps))), and under displacement control the
+    # force then falls. AT2 damages the ligament before the peak, so the phase field peaks
+    # later and near that load: quick run 0.705 kN at u = 6.75e-3 mm, full run 0.6944 kN at
+    # 5.57e-3 mm (phasefieldx 0.6915); 15 % either side of the Griffith band.
+    # The crack runs along the notch line (quick: to x = 0.66, within 0.015 of y = 0.5).
     force = history["Fy_top"]
     peak = int(np.argmax(force))
     assert 0.85 * 0.646 < force[peak] < 1.15 * 0.662, f"peak {force[peak]:.4f} kN"
@@ -200,19 +200,18 @@ def check_sent(history):
 
 
 def check_sens(history):
-    # Without a tension/compression split the notch grows straight ahead as a shear band:
-    # sigma:e, which drives z here, is largest straight ahead of a mode II tip, while the
-    # hoop-stress kink (-70.5 degrees, downwards, what split models show) needs tension there.
-    # The crack runs along the notch line and the force falls to a fraction of its peak.
-    # Once the crack has cut through to the right edge, the tip (the farthest node with
-    # z >= 1/2) moves along that edge as z spreads there: those points are not the path.
+    # Miehe's split in the hybrid formulation: z grows where the tensile part drives it, so the
+    # notch kinks as the maximum hoop stress of pure mode II says, -70.5 degrees (downwards).
+    # 10 degrees as for mode12_kink: the quick crack (epsilon = 0.03, P1) is fitted between
+    # epsilon and 4 epsilon from the notch tip (quick -68.5, full run -71 over 2..8 epsilon).
+    # The crack then runs to the bottom right and the force falls (quick: tip at (0.95, 0.23)
+    # by u = 0.018 mm, force 51 % of its peak there; full run: to the corner, 0.5 %).
+    angle, track = crack_angle(history, (0.5, 0.5), 0.03, 0.12)
+    assert abs(angle - (-70.5)) < 10, f"kink {angle:.1f} deg, predicted -70.5\n{track.text()}"
+    assert track.points[:, 1].min() < 0.35, track.text()
     force = history["Fx_top"]
     peak = int(np.argmax(force))
-    assert force[-1] < 0.5 * force[peak], f"no drop: peak {force[peak]:.4f}, end {force[-1]:.4f} kN"
-    _, track = crack_angle(history, (0.5, 0.5), 0.0, 1.0)
-    assert track.points[:, 0].max() > 0.6, track.text()
-    path = track.points[track.points[:, 0] < 0.99]
-    assert np.abs(path[:, 1] - 0.5).max() < 0.06, track.text()
+    assert force[-1] < 0.8 * force[peak], f"no drop: peak {force[peak]:.4f}, end {force[-1]:.4f} kN"
 
 
 def check_plate_hole_nucleus(stepper):

@@ -25,14 +25,14 @@ import pytest
 from ngfrac.post.reactions import reaction_columns
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from ngfrac.testing.scenes import demo_data, scene_from
+from ngfrac.testing.scenes import benchmark_scene_data, scene_from
 
 QUICK_SENT = ["phase_field.epsilon=0.03", "time.dt=1.25e-4", "time.t_end=8.5e-3", "output.vtk_every=0",
               "adaptivity.max_vertices=2000"]
 
 
 def force_jumps(relax: bool) -> list[float]:
-    scene = scene_from(demo_data("sent"), *QUICK_SENT, f"adaptivity.relax_core={str(relax).lower()}")
+    scene = scene_from(benchmark_scene_data("sent_band"), *QUICK_SENT, f"adaptivity.relax_core={str(relax).lower()}")
     stepper = PhaseFieldStepper(scene)
     for record in stepper.run():
         if record.tip_x > 0.6:
