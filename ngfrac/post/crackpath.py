@@ -290,6 +290,17 @@ def mts_kink_angle(k1: float, k2: float) -> float:
     return math.degrees(2 * math.atan((k1 - math.sqrt(k1 * k1 + 8 * k2 * k2)) / (4 * k2)))
 
 
+def _given_or_first_crack(scene: Scene, crack: Sequence[Sequence[float]] | None,
+                          hint: str) -> Sequence[Sequence[float]]:
+    """``crack``, or the points of the scene's first ``[[cracks]]``; without either a ValueError
+    that asks for ``hint``."""
+    if crack is not None:
+        return crack
+    if not scene.cracks:
+        raise ValueError(f"the scene has no [[cracks]]: give {hint}")
+    return scene.cracks[0].points
+
+
 def measure_kink(stepper: Any, rmin: float, rmax: float, n_radii: int = 25,
                  level: float = 0.5, *,
                  crack: Sequence[Sequence[float]] | None = None) -> tuple[float, CrackPath]:
@@ -299,10 +310,7 @@ def measure_kink(stepper: Any, rmin: float, rmax: float, n_radii: int = 25,
     ``[[cracks]]``, give it for a notch cut out of the geometry); arcs at ``n_radii`` radii
     from ``rmin`` to ``rmax``. Returns the angle in degrees and the ridge path.
     """
-    if crack is None:
-        if not stepper.scene.cracks:
-            raise ValueError("the scene has no [[cracks]]: give the initial crack as crack=...")
-        crack = stepper.scene.cracks[0].points
+    crack = _given_or_first_crack(stepper.scene, crack, "the initial crack as crack=...")
     origin, reference = tip_and_direction(crack)
     path = ridge_path(stepper.mesh, stepper.z, origin, reference,
                       np.linspace(rmin, rmax, n_radii), level=level)
@@ -430,11 +438,8 @@ def sharp_crack_solution(scene: Scene, t: float = 1.0, order: int = 3, h_tip: fl
     if not all(load.is_dirichlet for load in scene.loads) or scene.phase_field.pressurized:
         raise ValueError("sharp_crack_solution takes displacement loads only (no tractions, "
                          "pressures or crack pressure)")
-    if crack is None:
-        if not scene.cracks:
-            raise ValueError("the scene has no [[cracks]]: give the sharp crack as crack=[[x, y], "
-                             "[x, y]] (and the rectangle as box=[[x0, y0], [x1, y1]])")
-        crack = scene.cracks[0].points
+    crack = _given_or_first_crack(scene, crack, "the sharp crack as crack=[[x, y], [x, y]] (and "
+                                  "the rectangle as box=[[x0, y0], [x1, y1]])")
     if box is None:
         g = scene.geometry
         if g.kind != "rectangle":
