@@ -447,4 +447,5 @@ def transfer_fields(old: MeshFields, new: MeshFields) -> None:
         z_new, _ = transfer_phase_field(old.z, old.z, new.fes_z)
         new.z.vec.data = z_new.vec
         new.u.vec.data = transfer(old.u, new.fes_u, method="nodes" if vector_3d else "set").vec
+    new.clear_damage_free()  # the new boundary nodes need not be the old ones
     new.u_prev.vec.data = new.u.vec

@@ -1,6 +1,7 @@
 """The finite-element spaces and fields of one mesh: u, u_prev and z, and the quadrature."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,7 +52,9 @@ class MeshFields:
             scene.geometry.domain().curve(mesh, disc.order, [c.points for c in scene.cracks])
         fes_u = model.space(mesh, disc.order, scene.loads)
         z_order = disc.z_order_for(crack_model)
-        fes_z = ngs.H1(mesh, order=z_order)
+        damage_free = scene.phase_field.damage_free
+        fes_z = (ngs.H1(mesh, order=z_order, dirichlet="|".join(damage_free)) if damage_free
+                 else ngs.H1(mesh, order=z_order))
         exact = (scene.material.gamma.is_constant and scene.material.split == "none"
                  and not curved and crack_model.quadratic_degradation)
         order = quadrature_order(disc.order, z_order, exact=exact)
@@ -63,6 +66,30 @@ class MeshFields:
     def ndof(self) -> int:
         """Unknowns of u and z together."""
         return self.fes_u.ndof + self.fes_z.ndof
+
+    def clear_damage_free(self) -> None:
+        """z = 0 at the nodes of the ``phase_field.damage_free`` boundaries, the other nodes'
+        values kept (after z0 is set and after a mesh change's interpolation)."""
+        fixed = self.damage_free_nodes
+        if fixed.any():
+            values = self.z_values()
+            values[fixed] = 0.0
+            self.nodes.assign(self.z, values)
+
+    @functools.cached_property
+    def damage_free_dofs(self) -> np.ndarray:
+        """The dofs of fes_z held at z = 0 (bool; none without ``phase_field.damage_free``)."""
+        return ~np.array(self.fes_z.FreeDofs(), dtype=bool)
+
+    @functools.cached_property
+    def damage_free_nodes(self) -> np.ndarray:
+        """The Lagrange nodes held at z = 0 (bool): those a fixed dof's coefficient depends on
+        (P1: the boundary's vertices; P2 also its edges' midpoints)."""
+        fixed = np.zeros(self.nodes.n_nodes, dtype=bool)
+        if self.damage_free_dofs.any():
+            rows = self.nodes.coefficient_matrix().tocsr()[np.flatnonzero(self.damage_free_dofs)]
+            fixed[np.unique(rows.indices[rows.data != 0])] = True
+        return fixed
 
     def z_values(self) -> np.ndarray:
         """z at the Lagrange nodes."""

@@ -166,6 +166,8 @@ def _has_type(value: Any, hint: Any, default: Any) -> bool:
         return isinstance(value, (Expression, Components))
     if hint == tuple[float, ...]:
         return isinstance(value, tuple) and all(number(v) for v in value)
+    if hint == tuple[str, ...]:
+        return isinstance(value, tuple) and all(isinstance(v, str) for v in value)
     if _table_class(hint) is not None:
         return isinstance(value, tuple) and all(isinstance(v, _table_class(hint)) for v in value)
     if hint == tuple[tuple[float, ...], ...]:
@@ -232,6 +234,10 @@ def convert(value: Any, hint: Any, key: str) -> Any:
         if not isinstance(value, list):
             raise SceneError(f"{key} = {value!r} must be a list of numbers")
         return tuple(convert(v, float, key) for v in value)
+    if hint == tuple[str, ...]:
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise SceneError(f"{key} = {value!r} must be a list of names, e.g. [\"left\"]")
+        return tuple(value)
     table = _table_class(hint)
     if table is not None:
         if isinstance(value, Mapping):

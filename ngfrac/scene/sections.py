@@ -190,6 +190,9 @@ class PhaseField(Section):
     """PF-CZM's softening law: "linear", "exponential" or "cornelissen"."""
     drive: str = "energy"
     """W of the z-equation: "energy" (sigma:e; 2 psi+ with a split) or "rankine" (PF-CZM)."""
+    damage_free: tuple[str, ...] = ()
+    """Boundaries (``geometry.boundaries`` names) where z = 0: a homogeneous Dirichlet
+    condition on z, so no damage on these edges or faces (e.g. a hole's edge, a loading pad)."""
 
     def validate(self) -> None:
         s = self.SECTION
@@ -208,6 +211,8 @@ class PhaseField(Section):
                 "choose 'energy' (sigma:e) or 'rankine' (<sigma_1>^2/E, PF-CZM)")
         require(self.drive == "energy" or self.model == "PF-CZM", s, "drive", self.drive,
                 "'rankine' is PF-CZM's drive: set phase_field.model = 'PF-CZM'")
+        require(len(set(self.damage_free)) == len(self.damage_free), s, "damage_free",
+                list(self.damage_free), "names a boundary twice; give each once")
 
     @property
     def pressurized(self) -> bool:

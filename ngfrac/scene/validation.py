@@ -64,6 +64,12 @@ def validate_scene(scene: "Scene") -> None:
         seen.add(load.boundary)
         if "z" in load.value.names and scene.geometry.dim == 2:
             raise SceneError(f"loads[{i}].value = {load.value.text!r} uses z, but the domain is 2D")
+    for name in scene.phase_field.damage_free:
+        if name not in names:
+            close = difflib.get_close_matches(name, names, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise SceneError(f"phase_field.damage_free: {name!r} is not a boundary of the "
+                             f"geometry{hint}; boundaries are {', '.join(names)}")
     if "z" in scene.material.body_force.names and scene.geometry.dim == 2:
         raise SceneError(f"material.body_force = {scene.material.body_force.text!r} uses z, "
                          "but the domain is 2D")

@@ -76,12 +76,16 @@ class NodalObstacle:
     ----------
     nodes : ngfrac.fem.nodal.LagrangeNodes
         The nodes of the z-space.
+    fixed : numpy.ndarray, optional
+        Nodes held at their bound, z_old = 0 there (``phase_field.damage_free``,
+        :attr:`ngfrac.mesh.fields.MeshFields.damage_free_nodes`; bool).
     """
 
-    def __init__(self, nodes: "LagrangeNodes") -> None:
+    def __init__(self, nodes: "LagrangeNodes", fixed: np.ndarray | None = None) -> None:
         self.nodes = nodes
         self._to_coefficients = nodes.coefficient_matrix()
         self._active: np.ndarray | None = None
+        self.fixed = fixed
 
     def solve(self, ngs_matrix: object, ngs_rhs: object, z_old: object,
               result: object) -> ObstacleSolution:
@@ -92,14 +96,14 @@ class NodalObstacle:
         active = self._active
         if active is None:  # first guess: where the energy's slope at z_old pushes z down
             active = matrix @ lower - rhs > 0
-        solution = solve_lower_obstacle(matrix, rhs, lower, active)
+        solution = solve_lower_obstacle(matrix, rhs, lower, active, self.fixed)
         self._active = solution.active
         self.nodes.assign(result, solution.values)
         return solution
 
 
 def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarray,
-                         active: np.ndarray) -> ObstacleSolution:
+                         active: np.ndarray, fixed: np.ndarray | None = None) -> ObstacleSolution:
     """Minimize ``1/2 v.A v - f.v`` over ``v >= lower`` by primal-dual active sets.
 
     Parameters
@@ -112,13 +116,16 @@ def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarr
         The bound.
     active : numpy.ndarray
         The first guess of the nodes at the bound (bool), e.g. the last step's set.
+    fixed : numpy.ndarray, optional
+        Nodes held at their bound whatever their multiplier (a Dirichlet condition, bool).
 
     Returns
     -------
     ObstacleSolution
     """
     n = len(rhs)
-    active = np.asarray(active, dtype=bool).copy()
+    fixed = np.zeros(n, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
+    active = np.asarray(active, dtype=bool) | fixed
     values = np.array(lower, dtype=float)
     scale = float(np.max(np.abs(rhs))) if n else 0.0
     tol = 1e-12 * max(scale, np.finfo(float).tiny)
@@ -127,7 +134,7 @@ def solve_lower_obstacle(matrix: sp.csr_matrix, rhs: np.ndarray, lower: np.ndarr
         iterations += 1
         values = _solve_inactive(matrix, rhs, lower, active)
         multiplier = matrix @ values - rhs  # >= 0 where the bound holds z down
-        new_active = np.where(active, multiplier >= -tol, values < lower - VALUE_TOLERANCE)
+        new_active = np.where(active, multiplier >= -tol, values < lower - VALUE_TOLERANCE) | fixed
         if LOG.isEnabledFor(logging.DEBUG):
             LOG.debug("active set %d: %d nodes, %d in, %d out, below %.3g, multiplier %.3g",
                       iterations, active.sum(), (new_active & ~active).sum(),

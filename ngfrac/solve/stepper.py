@@ -165,6 +165,7 @@ class PhaseFieldStepper:
         if polylines:
             distance = distance_to_cracks(f.nodes.points, polylines)
             f.nodes.assign(f.z, self.crack_model.profile(distance, self.scene.phase_field.epsilon))
+            f.clear_damage_free()
         return f
 
     def _initial_u(self) -> None:

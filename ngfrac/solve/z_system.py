@@ -183,7 +183,8 @@ class AssembledSystem:
         """The right-hand side of the last sub-step."""
         self._ones = _constant_one(fields.fes_z, fields.z.vec)
         self._inverse: SystemInverse | None = None
-        self._obstacle = NodalObstacle(fields.nodes) if forms.update == "obstacle" else None
+        self._obstacle = (NodalObstacle(fields.nodes, fields.damage_free_nodes)
+                          if forms.update == "obstacle" else None)
 
     @property
     def matrix(self) -> Any:
