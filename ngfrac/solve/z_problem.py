@@ -77,7 +77,7 @@ class PhaseFieldProblem:
         :class:`SolverError`."""
         iterations = self.system.solve(self.z_trial, step)
         fixed = self.fields.damage_free_dofs
-        if fixed.any():  # phase_field.damage_free: the solves leave them at 0 up to round-off
+        if fixed.any():  # phase_field.damage_free: the solves leave them at 0; kept whatever the solver
             self.z_trial.vec.FV().NumPy()[fixed] = 0.0
         return iterations
 
