@@ -166,13 +166,21 @@ class DisplacementProblem:
             raise SolverError(f"the u-solve gave non-finite values at step {step}; "
                               "raise phase_field.residual_stiffness or lower time.dt")
 
+    def _at_rest(self) -> bool:
+        """u = 0 (boundary values included), no load form and no alpha1 term from a non-zero
+        u_prev: the residual is 0 without an assembly (u0 of a scene unloaded at t = 0).
+        Collective norms under MPI, so every rank decides alike."""
+        f = self.fields
+        return (self.f_u is None and f.u.vec.Norm() == 0.0
+                and (self.m_u is None or f.u_prev.vec.Norm() == 0.0))
+
     def _solve_linear(self, step: int | str) -> None:
+        if self._at_rest():  # the solution is u = 0: no assembly, no factorization
+            return
         with self.context.timer.phase("u: assemble"), self.context.threads.assembly(self.linear.preconditioner, "u"):
             self.a_u.Assemble()
             if self.f_u is not None:
                 self.f_u.Assemble()
-        with self.context.timer.phase("u: factorize"), self.context.threads.solves():
-            inverse = self.linear.factorize()
         with self.context.timer.phase("u: solve"), self.context.threads.solves():
             u = self.fields.u.vec
             residual = u.CreateVector()
@@ -183,6 +191,12 @@ class DisplacementProblem:
                 residual.data = -self.a_u.mat * u
             if self.f_u is not None:
                 residual.data += self.f_u.vec
+            # exactly zero (loads that vanish at t = 0): the solution is u, no factorization
+            if residual.Norm() == 0.0:
+                return
+        with self.context.timer.phase("u: factorize"), self.context.threads.solves():
+            inverse = self.linear.factorize()
+        with self.context.timer.phase("u: solve"), self.context.threads.solves():
             u.data += inverse * residual
             try:
                 self.linear.iterations()
@@ -221,6 +235,10 @@ class DisplacementProblem:
     def residual(self) -> ngs.BaseVector:
         """``R = A u - (1/dt) M u_prev - f`` with the forms of the last solve (A holds
         alpha1/dt M); zero at the free dofs, the reactions at the Dirichlet dofs."""
+        if self._at_rest():  # 0 without assembling A (A 0 = 0 exactly)
+            r = self.fields.u.vec.CreateVector()
+            r[:] = 0.0
+            return r
         try:
             matrix = self.a_u.mat
         except TypeError:  # not assembled yet
