@@ -2,6 +2,9 @@
 
 ``discretization.u_solver``:
 
+- ``"auto"`` (the default): ``"reused_cholesky"`` on a 3D mesh of at least
+  :data:`AUTO_REUSE_VERTICES` vertices, else ``"sparsecholesky"``, decided for each mesh
+  (:func:`resolve_u_solver`);
 - ``"sparsecholesky"``, ``"umfpack"``: NGSolve's sparse direct solvers; the factorization is
   made once per mesh and numerically updated after each assembly;
 - ``"reused_cholesky"``: CG preconditioned with the sparse Cholesky factor of an earlier
@@ -22,8 +25,12 @@ from typing import Any
 import ngsolve as ngs
 from ngsolve.krylovspace import CGSolver
 
-U_SOLVERS = ("sparsecholesky", "umfpack", "cg", "reused_cholesky")
+U_SOLVERS = ("auto", "sparsecholesky", "umfpack", "cg", "reused_cholesky")
 """Values of ``discretization.u_solver``."""
+AUTO_REUSE_VERTICES = 4000
+"""``u_solver = "auto"``: 3D meshes from this many vertices reuse a factorization. Measured
+(docs/solvers.md): no gain at 1,717 vertices and a loss at 3,000 with a running crack; gains
+of 1.07-2.6x from 4,311 vertices on, crack running or not."""
 Z_SOLVERS = ("cg", "sparsecholesky", "umfpack", "reused_cholesky")
 """Values of ``discretization.z_solver`` (``"cg"``: Jacobi-preconditioned, in
 :mod:`ngfrac.solve.z_system`)."""
@@ -97,6 +104,14 @@ class ReusedCholesky(ngs.BaseMatrix):
             self.iterations = 0
             return
         self.iterations = self.cg.iterations
+
+
+def resolve_u_solver(solver: str, mesh: ngs.Mesh) -> str:
+    """The u-solver of ``mesh`` for a ``discretization.u_solver`` (``"auto"`` by dimension and
+    vertex count: reproducible, it depends on the mesh alone)."""
+    if solver != "auto":
+        return solver
+    return "reused_cholesky" if mesh.dim == 3 and mesh.nv >= AUTO_REUSE_VERTICES else "sparsecholesky"
 
 
 def register_preconditioner(form: ngs.BilinearForm, solver: str) -> Any | None:

@@ -337,7 +337,7 @@ class Discretization(Section):
     SECTION: ClassVar[str] = "discretization"
     order: int = 2
     order_z: int = 0
-    u_solver: str = "sparsecholesky"
+    u_solver: str = "auto"
     z_solver: str = "sparsecholesky"
     coupling: str = "paper"
     z_update: str = "auto"
@@ -356,8 +356,9 @@ class Discretization(Section):
         require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
                 "must be 1 or 2 (0 = min(order, 2))")
         require(self.u_solver in U_SOLVERS, s, "u_solver", self.u_solver,
-                "choose 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG preconditioned "
-                "with an earlier factorization) or 'cg' (with BDDC)")
+                "choose 'auto' (reused_cholesky on 3D meshes of 4,000 vertices or more, else "
+                "sparsecholesky), 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG "
+                "preconditioned with an earlier factorization) or 'cg' (with BDDC)")
         require(self.z_solver in Z_SOLVERS, s, "z_solver", self.z_solver,
                 "choose 'cg', 'sparsecholesky', 'umfpack' or 'reused_cholesky' (CG "
                 "preconditioned with an earlier factorization)")

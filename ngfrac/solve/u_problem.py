@@ -22,7 +22,7 @@ from ..physics.elastic import traction_of
 from ..fem.newton import NewtonResult, NewtonSolver
 from ..physics.splits import make_split, tangent_integrators
 from ..scene import Scene
-from ..fem.linear import SystemInverse, register_preconditioner
+from ..fem.linear import SystemInverse, register_preconditioner, resolve_u_solver
 from .context import StepContext
 from ..fem.quadrature import dx_of_order
 from ..mesh.fields import MeshFields
@@ -80,7 +80,8 @@ class DisplacementProblem:
         self.a_u = ngs.BilinearForm(fes, symmetric=True)
         with tangent_integrators(self.split):
             self.a_u += stiffness * dx
-        solver = context.comm.u_solver(disc.u_solver)  # MPI: CG with BDDC
+        # MPI: CG with BDDC; "auto": by the mesh (ngfrac.fem.linear.resolve_u_solver)
+        solver = context.comm.u_solver(resolve_u_solver(disc.u_solver, fields.mesh))
         pre = register_preconditioner(self.a_u, solver)  # before any assembly
         self.linear = SystemInverse(self.a_u, fes.FreeDofs(), solver, pre)
         self.m_u = (ngs.BilinearForm(pf.alpha1 * u * v * dx, symmetric=True).Assemble()

@@ -2,6 +2,7 @@
 factorization; ngfrac.fem.linear), and z_solver = 'reused_cholesky', against the sparse direct
 solver."""
 import functools
+from types import SimpleNamespace
 
 import ngsolve as ngs
 import numpy as np
@@ -12,6 +13,7 @@ from ngfrac.fem.threads import single_thread
 
 from ngfrac import PhaseFieldStepper, Scene
 from ngfrac.scene import SceneError
+from ngfrac.scene.sections import Discretization
 
 
 def sent_like(u_solver, split="none", order=2, z_solver="sparsecholesky"):
@@ -104,3 +106,14 @@ def test_a_stale_factor_is_renewed_when_cg_stalls():
 def test_u_solver_is_validated():
     with pytest.raises(SceneError, match="u_solver"):
         sent_like("gmres")
+
+
+def test_auto_reuses_a_factorization_on_large_3d_meshes_only():
+    limit = linear.AUTO_REUSE_VERTICES
+    assert linear.resolve_u_solver("auto", SimpleNamespace(dim=3, nv=limit)) == "reused_cholesky"
+    assert linear.resolve_u_solver("auto", SimpleNamespace(dim=3, nv=limit - 1)) == "sparsecholesky"
+    assert linear.resolve_u_solver("auto", SimpleNamespace(dim=2, nv=100 * limit)) == "sparsecholesky"
+    for explicit in ("sparsecholesky", "umfpack", "cg", "reused_cholesky"):
+        assert linear.resolve_u_solver(explicit, SimpleNamespace(dim=3, nv=limit)) == explicit
+    assert sent_like("auto").discretization.u_solver == "auto"
+    assert Discretization().u_solver == "auto"
