@@ -182,7 +182,7 @@ class DisplacementProblem:
             self.a_u.Assemble()
             if self.f_u is not None:
                 self.f_u.Assemble()
-        with self.context.timer.phase("u: solve"), self.context.threads.solves():
+        with self.context.timer.phase("u: residual"), self.context.threads.solves():
             u = self.fields.u.vec
             residual = u.CreateVector()
             if self.m_u is not None:
