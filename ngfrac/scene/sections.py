@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Mapping
 
-from ..fem.linear import U_SOLVERS, Z_SOLVERS
+from ..fem.linear import AUTO_REUSE_VERTICES, U_SOLVERS, Z_SOLVERS
 from ..physics.crack_models import CRACK_MODELS, SOFTENING_LAWS
 from ..physics.elastic import ELASTIC_MODELS
 from ..physics.loads import LOAD_KINDS  # noqa: F401 (re-exported: the values of loads[i].kind)
@@ -356,8 +356,8 @@ class Discretization(Section):
         require(self.order_z in (0, 1, 2), s, "order_z", self.order_z,
                 "must be 1 or 2 (0 = min(order, 2))")
         require(self.u_solver in U_SOLVERS, s, "u_solver", self.u_solver,
-                "choose 'auto' (reused_cholesky on 3D meshes of 4,000 vertices or more, else "
-                "sparsecholesky), 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG "
+                f"choose 'auto' (reused_cholesky on 3D meshes of {AUTO_REUSE_VERTICES:,} vertices "
+                "or more, else sparsecholesky), 'sparsecholesky', 'umfpack', 'reused_cholesky' (CG "
                 "preconditioned with an earlier factorization) or 'cg' (with BDDC)")
         require(self.z_solver in Z_SOLVERS, s, "z_solver", self.z_solver,
                 "choose 'cg', 'sparsecholesky', 'umfpack' or 'reused_cholesky' (CG "
