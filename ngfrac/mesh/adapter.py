@@ -175,6 +175,18 @@ class MeshAdapter:
         return bool(np.all(np.isfinite(point))) and self.domain.on_boundary(point, self.sizes.h_band)
 
     @property
+    def initial_passes(self) -> int:
+        """New meshes that resolve z0 before the first step: ``adaptivity.initial_passes``, or
+        :data:`INITIAL_PASSES` of the domain's dimension when that is 0."""
+        return self.settings.initial_passes or INITIAL_PASSES[self.scene.geometry.dim]
+
+    @property
+    def initial_cracks(self) -> bool:
+        """Whether the scene has initial cracks (else z0 = 0: every initial pass after the first
+        would make the same mesh, since the sizes do not depend on it)."""
+        return bool(self.scene.cracks)
+
+    @property
     def tip_stopped(self) -> bool:
         """True once the tip of the last mesh change lay on the boundary (2D, from an
         interior tip): the crack has cut through, and the tip is no longer chased.
@@ -391,13 +403,15 @@ class MeshAdapter:
                         initial_z: Callable[[ngs.Mesh], MeshFields],
                         solves: Callable[[], AbstractContextManager] = nullcontext,
                         ) -> MeshFields:
-        """Resolve z0 before the first step: :data:`INITIAL_PASSES` times a new mesh for the
+        """Resolve z0 before the first step: :attr:`initial_passes` times a new mesh for the
         current z, on which ``initial_z(mesh)`` sets z0 from its formula (the meshes follow z
-        alone: the caller solves u0 on the last one)."""
-        for _ in range(INITIAL_PASSES):
+        alone: the caller solves u0 on the last one); one pass when z0 = 0."""
+        for _ in range(self.initial_passes):
             with solves():
                 mesh, _ = self.new_mesh(fields.mesh, fields.nodes, fields.z, tip(fields))
             fields = initial_z(mesh)
+            if not self.initial_cracks:
+                break
         self.remember(fields.mesh, fields.nodes, fields.z_values(), tip(fields))
         return fields
 
@@ -423,8 +437,11 @@ class MeshAdapter:
                             for a in state.get("adaptations", [])]
 
 
-INITIAL_PASSES = 3
-"""Mesh changes that resolve the initial crack's profile before the first step."""
+INITIAL_PASSES = {2: 3, 3: 2}
+"""Mesh changes that resolve the initial cracks' profile before the first step, by dimension
+(``adaptivity.initial_passes = 0``). In 3D a third pass costs a Netgen run of the whole mesh
+(4-5 s at 20,000 vertices) and changed the cube's z0 crack area by 0.05 % (docs/benchmarks.md,
+"Two initial passes in 3D")."""
 OPEN_LEVEL = 0.95
 """After a mesh change z is restored where one z-sub-step gives at least this (the open crack)."""
 

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 import ngsolve as ngs
 
-from ..mesh.adapter import INITIAL_PASSES, Adaptation, MeshAdapter
+from ..mesh.adapter import Adaptation, MeshAdapter
 from ..scene.build import crack_model_of, elastic_model_of
 from ..mesh.fields import MeshFields
 
@@ -425,7 +425,7 @@ class DistributedMeshAdapter(MeshAdapter):
                         ) -> MeshFields:
         """:meth:`MeshAdapter.resolve_initial` for a distributed run: each new mesh made on
         rank 0 from the gathered z0, distributed, and z0 set on it by ``initial_z``."""
-        for _ in range(INITIAL_PASSES):
+        for _ in range(self.initial_passes):
             at = tip(fields)
             self._gather(fields, ("z",))
             mesh = None
@@ -434,6 +434,8 @@ class DistributedMeshAdapter(MeshAdapter):
                 with solves():
                     mesh, _ = self.new_mesh(root.mesh, root.nodes, root.z, at)
             fields = initial_z(self._distribute(mesh))
+            if not self.initial_cracks:
+                break
         at = tip(fields)
         self._gather(fields, ("z",))
         if self.comm.is_root:

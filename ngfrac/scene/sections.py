@@ -434,6 +434,11 @@ class Adaptivity(Section):
     and under the cap coarsens the coarsest parts first; ``"equidistributed"`` keeps only the
     estimator's equidistribution (on size levels) and the tip disc, and under the cap scales
     every size alike (the Fig. 2 demo's setting; docs/benchmarks.md, section 11, compares them).
+
+    ``initial_passes`` is how many new meshes resolve the initial cracks' profile before the
+    first step (0 = by dimension: :data:`ngfrac.mesh.adapter.INITIAL_PASSES`, 3 in 2D and 2 in
+    3D); a scene without initial cracks stops after the first (z0 = 0: every further pass would
+    make the same mesh).
     """
 
     SECTION: ClassVar[str] = "adaptivity"
@@ -450,6 +455,7 @@ class Adaptivity(Section):
     tip_lane: bool = True
     relax_core: bool = False
     size_field: str = "bands"
+    initial_passes: int = 0
 
     def validate(self) -> None:
         s = self.SECTION
@@ -458,6 +464,8 @@ class Adaptivity(Section):
         require(self.size_field in SIZE_FIELDS, s, "size_field", self.size_field,
                 "choose 'bands' or 'equidistributed'")
         require(self.every >= 1, s, "every", self.every, "must be >= 1 (steps between checks)")
+        require(self.initial_passes >= 0, s, "initial_passes", self.initial_passes,
+                "must be >= 0 (0 = by dimension: 3 in 2D, 2 in 3D)")
         require(self.max_vertices >= 100, s, "max_vertices", self.max_vertices, "must be >= 100")
         require(self.hmin > 0, s, "hmin", self.hmin, "must be > 0")
         for name in ("hmax", "h_crack", "h_band", "h_tip", "tip_margin"):

@@ -12,7 +12,7 @@ from ngfrac.fem.elements import ElementGeometry
 from ngfrac.fem.nodal import LagrangeNodes
 from ngfrac.solve.stepper import PhaseFieldStepper
 
-from ngfrac.testing.scenes import quick_slit
+from ngfrac.testing.scenes import QUICK, demo_data, quick_slit, scene_from
 
 EPS = 0.04
 SLIT = [(0.0, 0.5), (0.5, 0.5)]
@@ -146,3 +146,45 @@ def test_no_element_is_smaller_than_hmin_in_an_adaptive_run():
     smallest = [r.hmin for r in stepper.run()]
     assert len(stepper.adaptations) >= 3
     assert min(smallest) >= hmin, (min(smallest), hmin, stepper.adapter.floor)
+
+
+def counting_new_meshes(monkeypatch):
+    """A list that gets one entry per :meth:`MeshAdapter.new_mesh` call."""
+    calls = []
+    new_mesh = MeshAdapter.new_mesh
+
+    def counted(self, *args, **kwargs):
+        calls.append(self.scene.geometry.dim)
+        return new_mesh(self, *args, **kwargs)
+
+    monkeypatch.setattr(MeshAdapter, "new_mesh", counted)
+    return calls
+
+
+def test_initial_passes_by_dimension_and_by_the_key(monkeypatch):
+    calls = counting_new_meshes(monkeypatch)
+    PhaseFieldStepper(quick_slit("adaptivity.enabled=true", "adaptivity.max_vertices=1000"))
+    assert calls == [2, 2, 2]  # 2D: three passes (ngfrac.mesh.adapter.INITIAL_PASSES)
+    calls.clear()
+    PhaseFieldStepper(quick_slit("adaptivity.enabled=true", "adaptivity.max_vertices=1000",
+                                 "adaptivity.initial_passes=1"))
+    assert calls == [2]
+    with pytest.raises(ValueError, match="initial_passes"):
+        quick_slit("adaptivity.initial_passes=-1")
+
+
+def test_a_scene_without_initial_cracks_stops_after_one_initial_pass(monkeypatch):
+    """z0 = 0 on every mesh, so a second pass would make the first pass's mesh again: it is
+    skipped (checked here by making it)."""
+    calls = counting_new_meshes(monkeypatch)
+    data = demo_data()
+    del data["cracks"]
+    stepper = PhaseFieldStepper(scene_from(data, *QUICK, "adaptivity.enabled=true",
+                                           "adaptivity.max_vertices=1000"))
+    assert calls == [2]
+    f = stepper.fields
+    assert f.z_values().max() == 0.0
+    again, _ = stepper.adapter.new_mesh(f.mesh, f.nodes, f.z, stepper.tip())
+    vertices = [np.array([v.point for v in m.vertices]) for m in (f.mesh, again)]
+    assert vertices[0].shape == vertices[1].shape
+    np.testing.assert_array_equal(vertices[0], vertices[1])
