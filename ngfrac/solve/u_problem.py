@@ -18,11 +18,12 @@ import numpy as np
 import ngsolve as ngs
 
 from ..physics.crack_models import CrackModel
-from ..physics.elastic import traction_of
+from ..physics.elastic import Elasticity, traction_of
 from ..fem.newton import NewtonResult, NewtonSolver
 from ..physics.splits import make_split, tangent_integrators
 from ..scene import Scene
 from ..fem.linear import SystemInverse, register_preconditioner, resolve_u_solver
+from ..fem.p1_elasticity import P1ElasticStiffness
 from .context import StepContext
 from ..fem.quadrature import dx_of_order
 from ..mesh.fields import MeshFields
@@ -91,6 +92,13 @@ class DisplacementProblem:
         self._newton = self._newton_solver(pf.alpha1) if self.split is not None else None
         self.indicators: dict = {}
         """Reaction test functions of this mesh (:func:`ngfrac.post.reactions.reaction`)."""
+        self._element_weights_wanted = (
+            fields.mesh.dim == 3 and self.split is None and pf.alpha1 == 0
+            and crack_model.quadratic_degradation and isinstance(model, Elasticity)
+            and P1ElasticStiffness.applies(fes, fields.fes_z))
+        """3D P1 u and z, linear u-step, g = (1 - z)^2 + eta: after NGSolve's first assembly
+        the matrix is assembled from element weights (:mod:`ngfrac.fem.p1_elasticity`)."""
+        self._element_weights: P1ElasticStiffness | None = None
 
     def _load_form(self, scene: Scene, v: Any) -> ngs.LinearForm | None:
         """f_u: the body force, the tractions and pressures on the boundary (not degraded)
@@ -179,7 +187,7 @@ class DisplacementProblem:
         if self._at_rest():  # the solution is u = 0: no assembly, no factorization
             return
         with self.context.timer.phase("u: assemble"), self.context.threads.assembly(self.linear.preconditioner, "u"):
-            self.a_u.Assemble()
+            self._assemble_stiffness()
             if self.f_u is not None:
                 self.f_u.Assemble()
         with self.context.timer.phase("u: residual"), self.context.threads.solves():
@@ -204,6 +212,18 @@ class DisplacementProblem:
             except RuntimeError as err:
                 raise SolverError(f"the u-solve failed at step {step}: {err}; "
                                   "set discretization.u_solver = 'sparsecholesky'") from None
+
+    def _assemble_stiffness(self) -> None:
+        """``a_u`` for the current z: by NGSolve, or by element weights into the matrix NGSolve
+        assembled first on this mesh (3D P1, see ``_element_weights_wanted``)."""
+        weights = self._element_weights
+        if weights is not None and weights.writes_into(self.a_u.mat):
+            weights.assemble(self.fields.z)
+            return
+        self.a_u.Assemble()
+        if self._element_weights_wanted and isinstance(self.a_u.mat, ngs.la.SparseMatrixd):
+            self._element_weights = P1ElasticStiffness(self.a_u.mat, self.fields.fes_u,
+                                                       self.model.lam, self.model.mu, self.eta)
 
     def _solve_newton(self, step: int | str) -> None:
         rhs = self.fields.u.vec.CreateVector()
@@ -243,7 +263,7 @@ class DisplacementProblem:
         try:
             matrix = self.a_u.mat
         except TypeError:  # not assembled yet
-            self.a_u.Assemble()
+            self._assemble_stiffness()
             matrix = self.a_u.mat
         f = self.fields
         r = f.u.vec.CreateVector()

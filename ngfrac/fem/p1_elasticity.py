@@ -1,0 +1,150 @@
+"""The degraded P1 stiffness matrix from element weights, without NGSolve's element loop.
+
+For P1 u on straight simplices the strain of every basis function is constant in each
+element, so with constant Lame constants the matrix of ``int g(z) sigma[u]:e[v] dx`` is
+
+    A = sum_T  mean_T(g(z))  K_T,
+
+K_T being the element's matrix of ``int_T sigma[u]:e[v] dx``. For P1 z and
+``g = (1 - z)^2 + eta`` the mean is exact from the vertex values ``w = 1 - z``:
+``mean(w^2) = (sum w_i^2 + (sum w_i)^2) / ((d + 1)(d + 2))``. The K_T and the position of each
+of their entries in the assembled matrix are computed once per mesh; an assembly is then one
+sparse matrix-vector product ``values = M g`` written into the matrix NGSolve assembled first
+(same sparsity, same dof numbers), so its factorization and solvers see the same object.
+Its sums run in a fixed order on one thread: the values do not depend on the thread count.
+"""
+from __future__ import annotations
+
+import numpy as np
+import ngsolve as ngs
+import scipy.sparse as sp
+
+from .elements import ElementGeometry
+
+__all__ = ["P1ElasticStiffness"]
+
+
+def _barycentric_gradients(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gradients (ne, d+1, d) of the barycentric coordinates and measures (ne,) of simplices
+    with ``corners`` (ne, d+1, d)."""
+    edges = corners[:, 1:] - corners[:, :1]  # (ne, d, d), rows = edge vectors
+    inverse = np.linalg.inv(edges)  # column k: gradient of lambda_{k+1}
+    d = corners.shape[2]
+    gradients = np.empty(corners.shape)
+    gradients[:, 1:] = np.transpose(inverse, (0, 2, 1))
+    gradients[:, 0] = -gradients[:, 1:].sum(axis=1)
+    factorial = 2.0 if d == 2 else 6.0
+    return gradients, np.abs(np.linalg.det(edges)) / factorial
+
+
+def element_stiffness(corners: np.ndarray, lam: float, mu: float) -> np.ndarray:
+    """K_T (ne, (d+1) d, (d+1) d) of ``int_T 2 mu e[u]:e[v] + lam div u div v`` for the P1
+    basis ``phi_a e_i`` ordered vertex-major (a, i)."""
+    gradients, measures = _barycentric_gradients(corners)
+    ne, n_corners, d = gradients.shape
+    g = gradients
+    k = np.empty((ne, n_corners, d, n_corners, d))  # (T, a, i, b, j)
+    np.multiply(g[:, :, :, None, None], g[:, None, None, :, :], out=k)  # G_ai G_bj
+    k *= lam
+    gt = np.transpose(g, (0, 2, 1))  # (T, i, b)
+    k += mu * (g[:, :, None, None, :] * gt[:, None, :, :, None])  # G_aj G_bi
+    dots = mu * np.matmul(g, gt)  # G_a . G_b
+    for i in range(d):
+        k[:, :, i, :, i] += dots
+    k *= measures[:, None, None, None, None]
+    return k.reshape(ne, n_corners * d, n_corners * d)
+
+
+def _neighbour_ranks(vertices: np.ndarray, columns: np.ndarray, starts: np.ndarray,
+                     nv: int) -> np.ndarray:
+    """rank[T, a, b]: where vertex b of element T stands among the neighbours of its vertex a
+    (the sorted columns below nv of the row of dof a), from the matrix's CSR arrays."""
+    rows = np.repeat(np.arange(nv, dtype=np.int64), np.diff(starts[: nv + 1]))
+    first = columns[: starts[nv]]
+    block = first < nv  # the first component's block of each of those rows
+    keys = rows[block] * nv + first[block]
+    offsets = (np.arange(starts[nv]) - starts[rows])[block]
+    n_corners = vertices.shape[1]
+    wanted = (np.repeat(vertices, n_corners, axis=1) * nv + np.tile(vertices, (1, n_corners))).ravel()
+    found = np.searchsorted(keys, wanted)
+    if np.any(found >= keys.size) or np.any(keys[np.minimum(found, keys.size - 1)] != wanted):
+        raise ValueError("P1ElasticStiffness: an element's vertex pair is not in the matrix")
+    return offsets[found].reshape(len(vertices), n_corners, n_corners)
+
+
+class P1ElasticStiffness:
+    """``int ((1 - z)^2 + eta) sigma[u]:e[v] dx`` for P1 u and P1 z, assembled by element
+    weights into a matrix NGSolve assembled for the same form (module docstring).
+
+    Parameters
+    ----------
+    mat : ngsolve.la.SparseMatrixd
+        The assembled matrix of the form (its sparsity and dof numbers are used; its values
+        are overwritten by :meth:`assemble`).
+    fes_u : ngsolve.FESpace
+        The order-1 ``VectorH1`` space of u (component-blocked dofs: c nv + vertex).
+    lam, mu : float
+        The Lame constants of the form (plane stress: the effective lam).
+    eta : float
+        The residual stiffness.
+    """
+
+    def __init__(self, mat: ngs.BaseMatrix, fes_u: ngs.FESpace, lam: float, mu: float,
+                 eta: float) -> None:
+        mesh = fes_u.mesh
+        geom = ElementGeometry.of(mesh)
+        d, nv = mesh.dim, mesh.nv
+        self.mat, self.eta, self.vertices = mat, eta, geom.vertices
+        values, columns, starts = mat.CSR()
+        self._values = np.asarray(values)
+        columns = np.asarray(columns).astype(np.int64)
+        starts = np.asarray(starts).astype(np.int64)
+        vertices = geom.vertices
+        rank = _neighbour_ranks(vertices, columns, starts, nv)
+        index = np.int32 if self._values.size < 2 ** 31 else np.int64
+        starts, rank = starts.astype(index), rank.astype(index)
+        # a row of dof (i, v) holds the columns (j, w) of v's neighbours w, block j after block
+        # i: its entry (j, w) sits at start(i, v) + j deg(v) + rank_v(w)
+        components = np.arange(d, dtype=index)
+        row_start = starts[vertices[:, :, None] + nv * components]  # (ne, d+1, d)
+        degree = (starts[vertices + 1] - starts[vertices]) // d  # (ne, d+1)
+        position = (row_start[:, :, :, None, None]
+                    + (degree[:, :, None, None, None] * components)
+                    + rank[:, :, None, :, None])  # (ne, a, i, b, j)
+        k = element_stiffness(geom.coordinates[vertices], lam, mu)
+        n_local = k.shape[1] * k.shape[2]
+        # column T of the weights holds K_T at its positions in the matrix's value array
+        self._weights = sp.csc_matrix(
+            (k.ravel(), position.ravel(), np.arange(0, n_local * len(k) + 1, n_local)),
+            shape=(self._values.size, len(k)))
+        self._denominator = float((d + 1) * (d + 2))
+
+    @staticmethod
+    def applies(fes_u: ngs.FESpace, fes_z: ngs.FESpace) -> bool:
+        """Whether u and z are order-1 spaces whose dofs are numbered as this class assumes
+        (vertex values; u component c of vertex v at c nv + v)."""
+        mesh = fes_u.mesh
+        nv, d = mesh.nv, mesh.dim
+        if fes_u.globalorder != 1 or fes_z.globalorder != 1 or nv == 0:
+            return False
+        if fes_u.ndof != d * nv or fes_z.ndof != nv:
+            return False
+        last = ngs.NodeId(ngs.VERTEX, nv - 1)
+        return (tuple(fes_u.GetDofNrs(last)) == tuple(c * nv + nv - 1 for c in range(d))
+                and tuple(fes_z.GetDofNrs(last)) == (nv - 1,))
+
+    def writes_into(self, mat: ngs.BaseMatrix) -> bool:
+        """Whether ``mat`` (a form's current matrix) is the matrix this was built on (the same
+        value array): NGSolve makes a new one when the space changes."""
+        values = mat.CSR()[0] if isinstance(mat, ngs.la.SparseMatrixd) else None
+        return (values is not None and len(values) == self._values.size
+                and np.asarray(values).ctypes.data == self._values.ctypes.data)
+
+    def element_degradation(self, z: np.ndarray) -> np.ndarray:
+        """mean_T((1 - z)^2) + eta per element, from the vertex values of z."""
+        w = 1.0 - z[self.vertices]
+        return (np.sum(w * w, axis=1) + np.sum(w, axis=1) ** 2) / self._denominator + self.eta
+
+    def assemble(self, z: ngs.GridFunction) -> None:
+        """Write the matrix for ``z`` into :attr:`mat`."""
+        self._values[:] = self._weights @ self.element_degradation(z.vec.FV().NumPy())
