@@ -243,8 +243,9 @@ def check_plate_hole(history):
 def check_box3d(history):
     # 3D, mode I: the edge crack grows in its own plane y = 0.5 (the loading is symmetric about
     # it) while the force on the top falls. Quick run (500 vertices, steps 0.04-0.16): tip
-    # to x = 0.60, within 0.063 of the plane, force 57% of its peak at t = 3; the full demo cuts
-    # the block at t = 2.76 (force 1.5% of the peak).
+    # to x = 0.60, within 0.080 of the plane, force 59% of its peak at t = 3 (session 23: 0.063
+    # and 57% before two initial passes in 3D and the P1 matrix by element weights); the full
+    # demo cuts the block at t = 2.74 (force 1.9% of the peak).
     tip_x, tip_y, tip_z = history["tip_x"], history["tip_y"], history["tip_z"]
     assert np.nanmax(tip_x) > 0.55, f"the crack grew only to x = {np.nanmax(tip_x):.3f}"
     grown = tip_x > 0.4
