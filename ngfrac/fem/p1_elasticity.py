@@ -20,27 +20,27 @@ import ngsolve as ngs
 import scipy.sparse as sp
 
 from .elements import ElementGeometry
+from .nodal import vertex_dofs_first
 
 __all__ = ["P1ElasticStiffness"]
 
 
-def _barycentric_gradients(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gradients (ne, d+1, d) of the barycentric coordinates and measures (ne,) of simplices
-    with ``corners`` (ne, d+1, d)."""
+def _barycentric_gradients(corners: np.ndarray) -> np.ndarray:
+    """Gradients (ne, d+1, d) of the barycentric coordinates of simplices with ``corners``
+    (ne, d+1, d)."""
     edges = corners[:, 1:] - corners[:, :1]  # (ne, d, d), rows = edge vectors
     inverse = np.linalg.inv(edges)  # column k: gradient of lambda_{k+1}
-    d = corners.shape[2]
     gradients = np.empty(corners.shape)
     gradients[:, 1:] = np.transpose(inverse, (0, 2, 1))
     gradients[:, 0] = -gradients[:, 1:].sum(axis=1)
-    factorial = 2.0 if d == 2 else 6.0
-    return gradients, np.abs(np.linalg.det(edges)) / factorial
+    return gradients
 
 
-def element_stiffness(corners: np.ndarray, lam: float, mu: float) -> np.ndarray:
+def element_stiffness(geom: ElementGeometry, lam: float, mu: float) -> np.ndarray:
     """K_T (ne, (d+1) d, (d+1) d) of ``int_T 2 mu e[u]:e[v] + lam div u div v`` for the P1
     basis ``phi_a e_i`` ordered vertex-major (a, i)."""
-    gradients, measures = _barycentric_gradients(corners)
+    gradients = _barycentric_gradients(geom.coordinates[geom.vertices])
+    measures = geom.measures
     ne, n_corners, d = gradients.shape
     g = gradients
     gt = np.transpose(g, (0, 2, 1))  # (T, i, b)
@@ -65,7 +65,7 @@ def _neighbour_ranks(vertices: np.ndarray, columns: np.ndarray, starts: np.ndarr
     """rank[T, a, b]: where vertex b of element T stands among the neighbours of its vertex a
     (the sorted columns below nv of the row of dof a), from the matrix's CSR arrays."""
     rows = np.repeat(np.arange(nv, dtype=np.int64), np.diff(starts[: nv + 1]))
-    first = columns[: starts[nv]]
+    first = columns[: starts[nv]]  # the rows of dofs 0..nv-1
     block = first < nv  # the first component's block of each of those rows
     keys = rows[block] * nv + first[block]
     offsets = (np.arange(starts[nv]) - starts[rows])[block]
@@ -99,13 +99,15 @@ class P1ElasticStiffness:
         mesh = fes_u.mesh
         geom = ElementGeometry.of(mesh)
         d, nv = mesh.dim, mesh.nv
+        # held: the value array written below is the matrix's own memory
         self.mat, self.eta, self.vertices = mat, eta, geom.vertices
         values, columns, starts = mat.CSR()
         self._values = np.asarray(values)
-        columns = np.asarray(columns).astype(np.int64)
         starts = np.asarray(starts).astype(np.int64)
         vertices = geom.vertices
-        rank = _neighbour_ranks(vertices, columns, starts, nv)
+        # the rows of the first component suffice (the others repeat their pattern)
+        rank = _neighbour_ranks(vertices, np.asarray(columns)[: starts[nv]].astype(np.int64),
+                                starts, nv)
         index = np.int32 if self._values.size < 2 ** 31 else np.int64
         starts, rank = starts.astype(index), rank.astype(index)
         # a row of dof (i, v) holds the columns (j, w) of v's neighbours w, block j after block
@@ -116,7 +118,7 @@ class P1ElasticStiffness:
         position = (row_start[:, :, :, None, None]
                     + (degree[:, :, None, None, None] * components)
                     + rank[:, :, None, :, None])  # (ne, a, i, b, j)
-        k = element_stiffness(geom.coordinates[vertices], lam, mu)
+        k = element_stiffness(geom, lam, mu)
         n_local = k.shape[1] * k.shape[2]
         # column T of the weights holds K_T at its positions in the matrix's value array
         self._weights = sp.csc_matrix(
@@ -136,7 +138,7 @@ class P1ElasticStiffness:
             return False
         last = ngs.NodeId(ngs.VERTEX, nv - 1)
         return (tuple(fes_u.GetDofNrs(last)) == tuple(c * nv + nv - 1 for c in range(d))
-                and tuple(fes_z.GetDofNrs(last)) == (nv - 1,))
+                and vertex_dofs_first(fes_z))
 
     def writes_into(self, mat: ngs.BaseMatrix) -> bool:
         """Whether ``mat`` (a form's current matrix) is the matrix this was built on (the same

@@ -177,14 +177,12 @@ class MeshAdapter:
     @property
     def initial_passes(self) -> int:
         """New meshes that resolve z0 before the first step: ``adaptivity.initial_passes``, or
-        :data:`INITIAL_PASSES` of the domain's dimension when that is 0."""
+        :data:`INITIAL_PASSES` of the domain's dimension when that is 0; one without initial
+        cracks (z0 = 0: every pass after the first would make the same mesh, since the sizes
+        do not depend on it)."""
+        if not self.scene.cracks:
+            return 1
         return self.settings.initial_passes or INITIAL_PASSES[self.scene.geometry.dim]
-
-    @property
-    def initial_cracks(self) -> bool:
-        """Whether the scene has initial cracks (else z0 = 0: every initial pass after the first
-        would make the same mesh, since the sizes do not depend on it)."""
-        return bool(self.scene.cracks)
 
     @property
     def tip_stopped(self) -> bool:
@@ -405,13 +403,11 @@ class MeshAdapter:
                         ) -> MeshFields:
         """Resolve z0 before the first step: :attr:`initial_passes` times a new mesh for the
         current z, on which ``initial_z(mesh)`` sets z0 from its formula (the meshes follow z
-        alone: the caller solves u0 on the last one); one pass when z0 = 0."""
+        alone: the caller solves u0 on the last one)."""
         for _ in range(self.initial_passes):
             with solves():
                 mesh, _ = self.new_mesh(fields.mesh, fields.nodes, fields.z, tip(fields))
             fields = initial_z(mesh)
-            if not self.initial_cracks:
-                break
         self.remember(fields.mesh, fields.nodes, fields.z_values(), tip(fields))
         return fields
 

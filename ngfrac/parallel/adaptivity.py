@@ -434,8 +434,6 @@ class DistributedMeshAdapter(MeshAdapter):
                 with solves():
                     mesh, _ = self.new_mesh(root.mesh, root.nodes, root.z, at)
             fields = initial_z(self._distribute(mesh))
-            if not self.initial_cracks:
-                break
         at = tip(fields)
         self._gather(fields, ("z",))
         if self.comm.is_root:

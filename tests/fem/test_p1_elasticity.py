@@ -8,6 +8,7 @@ from netgen.occ import Box, OCCGeometry, Pnt
 from ngfrac.fem.p1_elasticity import P1ElasticStiffness
 from ngfrac.fem.quadrature import dx_of_order
 from ngfrac.fem.threads import single_thread
+from ngfrac.physics.elastic import Elasticity
 from ngfrac.scene import Scene
 from ngfrac.solve.stepper import PhaseFieldStepper
 
@@ -23,10 +24,9 @@ def ngsolve_form(mesh, dirichlet):
     fes_z = ngs.H1(mesh, order=1)
     z = ngs.GridFunction(fes_z)
     u, v = fes.TnT()
-    eu, ev = ngs.Sym(ngs.Grad(u)), ngs.Sym(ngs.Grad(v))
     form = ngs.BilinearForm(fes, symmetric=True)
-    form += ((1 - z) ** 2 + ETA) * (2 * MU * ngs.InnerProduct(eu, ev)
-                                   + LAM * ngs.Trace(eu) * ngs.Trace(ev)) * dx_of_order(mesh, 2)
+    model = Elasticity(LAM, MU, dim=mesh.dim)
+    form += ((1 - z) ** 2 + ETA) * model.stress_strain(u, v) * dx_of_order(mesh, 2)
     return fes, fes_z, z, form
 
 
