@@ -11,7 +11,9 @@ K_T being the element's matrix of ``int_T sigma[u]:e[v] dx``. For P1 z and
 of their entries in the assembled matrix are computed once per mesh; an assembly is then one
 sparse matrix-vector product ``values = M g`` written into the matrix NGSolve assembled first
 (same sparsity, same dof numbers), so its factorization and solvers see the same object.
-Its sums run in a fixed order on one thread: the values do not depend on the thread count.
+Only the entries on and below the diagonal are weighted (K_T is symmetric); each entry above
+is copied from its mirror, which halves the weights' memory. Its sums run in a fixed order on
+one thread: the values do not depend on the thread count.
 """
 from __future__ import annotations
 
@@ -77,6 +79,22 @@ def _neighbour_ranks(vertices: np.ndarray, columns: np.ndarray, starts: np.ndarr
     return offsets[found].reshape(len(vertices), n_corners, n_corners)
 
 
+def _upper_entries(columns: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The positions of a structurally symmetric CSR matrix's entries above the diagonal and,
+    for each, the position of its mirror below it."""
+    n = len(starts) - 1
+    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(starts.astype(np.int64)))
+    columns = columns.astype(np.int64)
+    upper = np.flatnonzero(columns > rows)
+    keys = rows * n + columns  # ascending: rows in order, columns sorted in each row
+    wanted = columns[upper] * n + rows[upper]
+    mirror = np.searchsorted(keys, wanted)
+    if np.any(mirror >= keys.size) or np.any(keys[np.minimum(mirror, keys.size - 1)] != wanted):
+        raise ValueError("P1ElasticStiffness: the matrix's sparsity is not symmetric")
+    index = np.int32 if keys.size < 2 ** 31 else np.int64
+    return upper.astype(index), mirror.astype(index)
+
+
 class P1ElasticStiffness:
     """``int ((1 - z)^2 + eta) sigma[u]:e[v] dx`` for P1 u and P1 z, assembled by element
     weights into a matrix NGSolve assembled for the same form (module docstring).
@@ -118,12 +136,17 @@ class P1ElasticStiffness:
         position = (row_start[:, :, :, None, None]
                     + (degree[:, :, None, None, None] * components)
                     + rank[:, :, None, :, None])  # (ne, a, i, b, j)
-        k = element_stiffness(geom, lam, mu)
-        n_local = k.shape[1] * k.shape[2]
-        # column T of the weights holds K_T at its positions in the matrix's value array
+        k = element_stiffness(geom, lam, mu).reshape(position.shape)
+        # the entries on and below the diagonal: row dof (i, v_a) >= column dof (j, v_b)
+        row_dof = (components[None, None, :] * nv + vertices[:, :, None]).astype(np.int64)
+        lower = (row_dof[:, :, :, None, None] >= row_dof[:, None, None, :, :]).reshape(len(k), -1)
+        n_local = int(lower[0].sum())  # the same count in every element: (n + 1) n / 2
+        # column T of the weights holds K_T's lower half at its positions in the value array
         self._weights = sp.csc_matrix(
-            (k.ravel(), position.ravel(), np.arange(0, n_local * len(k) + 1, n_local)),
-            shape=(self._values.size, len(k)))
+            (k.reshape(len(k), -1)[lower], position.reshape(len(k), -1)[lower],
+             np.arange(0, n_local * len(k) + 1, n_local)), shape=(self._values.size, len(k)))
+        del k, position
+        self._upper, self._mirror = _upper_entries(np.asarray(columns), starts)
         self._denominator = float((d + 1) * (d + 2))
 
     @staticmethod
@@ -154,4 +177,6 @@ class P1ElasticStiffness:
 
     def assemble(self, z: ngs.GridFunction) -> None:
         """Write the matrix for ``z`` into :attr:`mat`."""
-        self._values[:] = self._weights @ self.element_degradation(z.vec.FV().NumPy())
+        values = self._weights @ self.element_degradation(z.vec.FV().NumPy())
+        values[self._upper] = values[self._mirror]
+        self._values[:] = values
