@@ -2,10 +2,11 @@
 import ngsolve as ngs
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from netgen.geom2d import unit_square
 from netgen.occ import Box, OCCGeometry, Pnt
 
-from ngfrac.fem.p1_elasticity import P1ElasticStiffness
+from ngfrac.fem.p1_elasticity import P1ElasticStiffness, _upper_entries
 from ngfrac.fem.quadrature import dx_of_order
 from ngfrac.fem.threads import single_thread
 from ngfrac.physics.elastic import Elasticity
@@ -60,6 +61,19 @@ def test_applies_only_to_p1_spaces():
     mesh = ngs.Mesh(unit_square.GenerateMesh(maxh=0.3))
     assert not P1ElasticStiffness.applies(ngs.VectorH1(mesh, order=2), ngs.H1(mesh, order=1))
     assert not P1ElasticStiffness.applies(ngs.VectorH1(mesh, order=1), ngs.H1(mesh, order=2))
+
+
+def test_upper_entries_find_their_mirrors_and_refuse_an_unsymmetric_pattern():
+    pattern = sp.random(30, 30, density=0.2, random_state=1, format="csr")
+    pattern = (pattern + pattern.T + sp.identity(30)).tocsr()
+    pattern.sort_indices()
+    upper, mirror = _upper_entries(pattern.indices, pattern.indptr)
+    rows = np.repeat(np.arange(30), np.diff(pattern.indptr))
+    assert len(upper) == (pattern.nnz - 30) // 2
+    assert np.array_equal(rows[upper], pattern.indices[mirror])
+    assert np.array_equal(pattern.indices[upper], rows[mirror])
+    with pytest.raises(ValueError, match="not symmetric"):
+        _upper_entries(np.array([0, 1, 1]), np.array([0, 2, 3]))  # (0, 1) without (1, 0)
 
 
 def box_history(monkeypatch, element_weights, steps=6):
