@@ -12,7 +12,7 @@ of their entries in the assembled matrix are computed once per mesh; an assembly
 sparse matrix-vector product ``values = M g`` written into the matrix NGSolve assembled first
 (same sparsity, same dof numbers), so its factorization and solvers see the same object.
 Only the entries on and below the diagonal are weighted (K_T is symmetric); each entry above
-is copied from its mirror, which halves the weights' memory. Its sums run in a fixed order on
+is copied from its mirror (78 of 144 weights per tetrahedron). Its sums run in a fixed order on
 one thread: the values do not depend on the thread count.
 """
 from __future__ import annotations
