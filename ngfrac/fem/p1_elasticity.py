@@ -62,6 +62,15 @@ def element_stiffness(geom: ElementGeometry, lam: float, mu: float) -> np.ndarra
     return k.reshape(ne, n_corners * d, n_corners * d)
 
 
+def _positions(keys: np.ndarray, wanted: np.ndarray, missing: str) -> np.ndarray:
+    """Where each of ``wanted`` stands in the ascending ``keys`` (row * n + column of a CSR
+    pattern); a ValueError saying ``missing`` if one of them is not there."""
+    found = np.searchsorted(keys, wanted)
+    if np.any(found >= keys.size) or np.any(keys[np.minimum(found, keys.size - 1)] != wanted):
+        raise ValueError(f"P1ElasticStiffness: {missing}")
+    return found
+
+
 def _neighbour_ranks(vertices: np.ndarray, columns: np.ndarray, starts: np.ndarray,
                      nv: int) -> np.ndarray:
     """rank[T, a, b]: where vertex b of element T stands among the neighbours of its vertex a
@@ -73,9 +82,7 @@ def _neighbour_ranks(vertices: np.ndarray, columns: np.ndarray, starts: np.ndarr
     offsets = (np.arange(starts[nv]) - starts[rows])[block]
     n_corners = vertices.shape[1]
     wanted = (np.repeat(vertices, n_corners, axis=1) * nv + np.tile(vertices, (1, n_corners))).ravel()
-    found = np.searchsorted(keys, wanted)
-    if np.any(found >= keys.size) or np.any(keys[np.minimum(found, keys.size - 1)] != wanted):
-        raise ValueError("P1ElasticStiffness: an element's vertex pair is not in the matrix")
+    found = _positions(keys, wanted, "an element's vertex pair is not in the matrix")
     return offsets[found].reshape(len(vertices), n_corners, n_corners)
 
 
@@ -88,9 +95,7 @@ def _upper_entries(columns: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray,
     upper = np.flatnonzero(columns > rows)
     keys = rows * n + columns  # ascending: rows in order, columns sorted in each row
     wanted = columns[upper] * n + rows[upper]
-    mirror = np.searchsorted(keys, wanted)
-    if np.any(mirror >= keys.size) or np.any(keys[np.minimum(mirror, keys.size - 1)] != wanted):
-        raise ValueError("P1ElasticStiffness: the matrix's sparsity is not symmetric")
+    mirror = _positions(keys, wanted, "the matrix's sparsity is not symmetric")
     index = np.int32 if keys.size < 2 ** 31 else np.int64
     return upper.astype(index), mirror.astype(index)
 
