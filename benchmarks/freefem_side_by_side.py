@@ -3,10 +3,12 @@
     NGFRAC_THREADS=1 python benchmarks/freefem_side_by_side.py [--preset quick|full]
         [--caps 1350 2600 ...] [--set key=value ...] [--out DIR] [--fresh-reference]
         [--tools FreeFEM ngfrac] [--ngfrac-set key=value ...] [--freefem-isotropic]
+        [--freefem-no-slit-edge]
 
 FreeFEM runs ``benchmarks/freefem/phasefield.edp``, the paper's eq. 7 written for it (mode III,
 P2 for u and z, z = min(1, max(zt, z_old)) at the P2 dofs, ``adaptmesh`` on z every step with
-hmin and a vertex cap). Every parameter comes from the ngfrac scene (``ngfrac.load_scene`` with
+hmin and a vertex cap; the crack segment an internal edge of FreeFEM's meshes, as it is of
+ngfrac's, unless ``--freefem-no-slit-edge``). Every parameter comes from the ngfrac scene (``ngfrac.load_scene`` with
 ``--set`` overrides) and is passed on FreeFEM's command line: epsilon, alpha1, alpha2,
 residual_stiffness, mu, gamma, dt, t_end, hmin, hmax (ngfrac's resolved one), the cap, the
 rectangle and the crack segment, the load slopes on top and bottom.
@@ -139,11 +141,11 @@ def freefem_command() -> list[str] | None:
 
 
 # -- the two tools ----------------------------------------------------------------------------
-def run_freefem(command: list[str], scene, out_csv: Path,
-                isotropic: bool = False) -> tuple[dict[str, np.ndarray], float, float]:
+def run_freefem(command: list[str], scene, out_csv: Path, isotropic: bool = False,
+                slit_edge: bool = True) -> tuple[dict[str, np.ndarray], float, float]:
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
     args = [*command, str(EDP), *freefem_arguments(scene), "-out", str(out_csv),
-            "-iso", "1" if isotropic else "0"]
+            "-iso", "1" if isotropic else "0", "-slitedge", "1" if slit_edge else "0"]
     cpu0, wall0 = cpu_seconds(resource.RUSAGE_CHILDREN), time.perf_counter()
     done = subprocess.run(args, env=env, capture_output=True, text=True)
     wall, cpu = time.perf_counter() - wall0, cpu_seconds(resource.RUSAGE_CHILDREN) - cpu0
@@ -300,6 +302,9 @@ def main() -> None:
     parser.add_argument("--freefem-isotropic", action="store_true",
                         help="FreeFEM's adaptmesh with an isotropic metric (iso = true), as Netgen's "
                              "meshes are: how much of FreeFEM's accuracy per vertex is anisotropy")
+    parser.add_argument("--freefem-no-slit-edge", action="store_true",
+                        help="FreeFEM's meshes without the crack segment as an internal edge (before "
+                             "session 25: z0's crack length then 0.9 %% low, docs/benchmarks.md 17)")
     args = parser.parse_args()
 
     command = freefem_command() if "FreeFEM" in args.tools else []
@@ -337,7 +342,7 @@ def main() -> None:
             print(f"{tool} cap {cap} ...", flush=True)
             if tool == "FreeFEM":
                 data, cpu, wall = run_freefem(command, scene, out / f"freefem_cap{cap}.csv",
-                                              args.freefem_isotropic)
+                                              args.freefem_isotropic, not args.freefem_no_slit_edge)
                 notes.append(f"FreeFEM cap {cap}: z in [{np.min(data['zmin']):.3g}, {np.max(data['zmax']):.6g}], "
                              f"smallest z^k - z^(k-1) on a step's mesh {np.min(data['dzmin'][1:]):.3g}, "
                              f"at most {int(np.max(data['nv']))} vertices, {int(np.sum(data['tries'] > 1))} "
@@ -362,6 +367,7 @@ def main() -> None:
              f"L(0): the crack length of z0 (for a slit from an edge exactly l + pi eps/4 = "
              f"{slit_length + math.pi * eps / 4:.4f})."
              + (" FreeFEM's metric isotropic (adaptmesh iso = true)." if args.freefem_isotropic else "")
+             + (" FreeFEM's meshes without the slit as an edge." if args.freefem_no_slit_edge else "")
              + (f" ngfrac runs with {' '.join(args.ngfrac_overrides)}." if args.ngfrac_overrides else ""),
              "",
              "| tool | cap | mean nv | CPU s | wall s | L(0) | L err max | L err mean | before growth | "
