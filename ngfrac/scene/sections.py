@@ -310,6 +310,9 @@ class TimeSettings(Section):
 Z_UPDATES = ("auto", "projection", "descent", "obstacle")
 """The values of ``discretization.z_update``."""
 
+COUPLINGS = ("paper", "staggered", "alternate")
+"""The values of ``discretization.coupling``."""
+
 
 @dataclass(frozen=True)
 class Discretization(Section):
@@ -318,7 +321,11 @@ class Discretization(Section):
     ``order`` is the polynomial order of u; ``order_z`` that of z (1 or 2: the bounds and
     the non-repair condition are enforced at the Lagrange nodes, which is exact for P1/P2).
     ``coupling = "paper"`` solves z with the previous u (the paper's eq. 7);
-    ``"staggered"`` uses the u just computed. ``z_update = "projection"`` is the paper's
+    ``"staggered"`` uses the u just computed; ``"alternate"`` repeats the staggered u- and
+    z-sub-steps within the step, each pass from the last one's fields, until a pass changes z
+    at no node by more than ``alternate_tolerance`` (at most ``alternate_passes`` passes; the
+    passes' z_old is the last pass's z, so z never decreases between passes and, with
+    alpha2 > 0, the viscous term vanishes at the fixed point). ``z_update = "projection"`` is the paper's
     ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
@@ -340,6 +347,8 @@ class Discretization(Section):
     u_solver: str = "auto"
     z_solver: str = "sparsecholesky"
     coupling: str = "paper"
+    alternate_tolerance: float = 1e-4
+    alternate_passes: int = 100
     z_update: str = "auto"
     threaded_solves: bool = False
     concurrent_substeps: bool = False
@@ -362,8 +371,13 @@ class Discretization(Section):
         require(self.z_solver in Z_SOLVERS, s, "z_solver", self.z_solver,
                 "choose 'cg', 'sparsecholesky', 'umfpack' or 'reused_cholesky' (CG "
                 "preconditioned with an earlier factorization)")
-        require(self.coupling in ("paper", "staggered"), s, "coupling", self.coupling,
-                "choose 'paper' (z uses the previous u) or 'staggered' (z uses the new u)")
+        require(self.coupling in COUPLINGS, s, "coupling", self.coupling,
+                "choose 'paper' (z uses the previous u), 'staggered' (z uses the new u) or "
+                "'alternate' (staggered passes until z settles)")
+        require(self.alternate_tolerance > 0, s, "alternate_tolerance", self.alternate_tolerance,
+                "must be > 0 (the largest change of z at a node that ends the passes)")
+        require(self.alternate_passes >= 1, s, "alternate_passes", self.alternate_passes,
+                "must be an integer >= 1")
         require(self.z_update in Z_UPDATES, s, "z_update", self.z_update,
                 "choose 'auto', 'projection' (the paper's min(1, max(z_trial, z_old))), "
                 "'descent' (the projection, shortened where it would raise the z-step's "

@@ -7,7 +7,8 @@ Step k, from t_{k-1} to t_k = t_{k-1} + dt (all times on the grid n * time.dt)::
     z^k = min(1, max(zt, z^{k-1}))        at the Lagrange nodes of z
 
 with ``W = sigma[u^{k-1}]:e[u^{k-1}]`` (``coupling = "paper"``) or ``sigma[u^k]:e[u^k]``
-(``coupling = "staggered"``); the crack model (AT2 above, or AT1) sets the surface terms.
+(``coupling = "staggered"``; ``"alternate"`` repeats the two sub-steps from the new fields
+until z settles); the crack model (AT2 above, or AT1) sets the surface terms.
 The stepper composes the u-sub-problem (:mod:`~ngfrac.solve.u_problem`), the z-sub-problem
 (:mod:`~ngfrac.solve.z_problem`) and the step-size control (:mod:`~ngfrac.solve.time_control`);
 the adapter (:mod:`ngfrac.mesh.adapter`) owns every mesh change.
@@ -15,6 +16,7 @@ the adapter (:mod:`ngfrac.mesh.adapter`) owns every mesh change.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import time
 from concurrent.futures import ThreadPoolExecutor, wait
@@ -48,6 +50,8 @@ from .u_problem import DisplacementProblem, NewtonFailure, SolverError
 from .z_problem import PhaseFieldProblem
 
 __all__ = ["PhaseFieldStepper"]
+
+log = logging.getLogger(__name__)
 
 
 class PhaseFieldStepper:
@@ -329,6 +333,17 @@ class PhaseFieldStepper:
                     solve_s += time.perf_counter() - solve_started
                 with self.timer.phase("z: bounds at nodes"):
                     old, new = self.z_problem.project()
+                if self.scene.discretization.coupling == "alternate":
+                    try:
+                        new, alternate_s = self._alternate(saved_z, new - old, diagnose)
+                    except NewtonFailure:
+                        if not self.control.halve():
+                            raise
+                        f.z.vec.data = saved_z
+                        f.u.vec.data = f.u_prev.vec
+                        self.timer.add("time: halved steps (Newton failed)", 0.0)
+                        continue
+                    solve_s += alternate_s
                 dz_max = self.comm.max(float(np.max(new - old)) if len(new) else 0.0)
                 if not self.control.rejects(dz_max):
                     break
@@ -355,6 +370,60 @@ class PhaseFieldStepper:
         return self.record(diagnose, diagnostics, dz_max=dz_max, z_iterations=iterations,
                            dt=n * dt, step_s=time.perf_counter() - started - diagnostics_s,
                            solve_s=solve_s, adapt_s=adapt_s)
+
+    def _alternate(self, z_start: ngs.BaseVector, change: np.ndarray,
+                   diagnose: bool) -> tuple[np.ndarray, float]:
+        """``coupling = "alternate"``: after the step's first (staggered) pass, more u- and
+        z-sub-steps from the last pass's fields until a pass changes z at no node by more than
+        ``discretization.alternate_tolerance`` or ``alternate_passes`` passes are made. Each
+        pass's z-step is linearized at the last pass's z (z_old of its forms), its non-repair
+        bound is the step's z^{k-1}: z may fall back between passes, never below z^{k-1}.
+
+        Parameters
+        ----------
+        z_start : ngsolve.BaseVector
+            z^{k-1}, the coefficients of z at the step's start.
+        change : array
+            The first pass's change of z at the nodes.
+        diagnose : bool
+            Renew the reaction forces after each u-solve (the last one's are kept).
+
+        Returns
+        -------
+        (z at the nodes after the last pass, seconds spent in the sub-steps)
+        """
+        d = self.scene.discretization
+        spent, passes, new = 0.0, 1, None
+        largest = self.comm.max(float(np.max(change)) if len(change) else 0.0)
+        if largest <= d.alternate_tolerance or d.alternate_passes <= 1:
+            return self.nodes.values(self.fields.z), spent
+        start = ngs.GridFunction(self.fields.fes_z)  # z^{k-1}, the non-repair bound of the passes
+        start.vec.data = z_start
+        self.z_problem.bound_by(start)
+        try:
+            while largest > d.alternate_tolerance and passes < d.alternate_passes:
+                started = time.perf_counter()
+                self.solve_u()
+                if diagnose:
+                    with self.timer.phase("diagnostics: reactions"):
+                        self.forces = reaction_columns(self.u_problem, self.scene.loads)
+                self.z_problem.solve(self._step_label())
+                spent += time.perf_counter() - started
+                with self.timer.phase("z: bounds at nodes"):
+                    old, new = self.z_problem.project()
+                largest = self.comm.max(float(np.max(np.abs(new - old))) if len(new) else 0.0)
+                passes += 1
+                self.timer.add("alternate: extra passes", 0.0)
+        finally:
+            self.z_problem.bound_by(None)
+        if largest > d.alternate_tolerance:
+            self.timer.add("alternate: steps ended by alternate_passes", 0.0)
+            log.warning("step %s: %d alternate passes left z changing by %.3g (tolerance %.3g); "
+                        "raise discretization.alternate_passes or lower time.dt",
+                        self._step_label(), passes, largest, d.alternate_tolerance)
+        if new is None:
+            new = self.nodes.values(self.fields.z)
+        return new, spent
 
     @property
     def _concurrent(self) -> bool:

@@ -96,13 +96,25 @@ class PhaseFieldProblem:
         """The sub-step's solution at the Lagrange nodes."""
         return self.fields.nodes.values(self.z_trial)
 
+    def bound_by(self, lower: ngs.GridFunction | None) -> None:
+        """Make ``lower`` the non-repair bound of the following sub-steps instead of z_old
+        (``coupling = "alternate"``: the step's z^{k-1} while z holds the last pass's z);
+        None restores z_old."""
+        self.lower = lower
+        if hasattr(self.system, "lower"):  # the obstacle's bound (one process)
+            self.system.lower = lower
+
+    lower: ngs.GridFunction | None = None
+    """The bound set by :meth:`bound_by`; None: z_old."""
+
     def project(self) -> tuple[np.ndarray, np.ndarray]:
-        """Non-repair: z = min(1, max(z_trial, z_old)) at the nodes (with
-        ``z_update = "descent"`` the energy minimizer between z_old and that projection);
-        returns (z_old, z) at the nodes and sets the field z."""
+        """Non-repair: z = min(1, max(z_trial, z_old)) at the nodes (z_old, or the bound of
+        :meth:`bound_by`; with ``z_update = "descent"`` the energy minimizer between z_old and
+        that projection); returns (z_old, z) at the nodes and sets the field z."""
         nodes = self.fields.nodes
         old = nodes.values(self.fields.z)
-        new = np.minimum(1.0, np.maximum(self.trial_values(), old))
+        lower = old if self.lower is None else nodes.values(self.lower)
+        new = np.minimum(1.0, np.maximum(self.trial_values(), lower))
         if self.update == "descent":
             new = self._descent(old, new)
         nodes.assign(self.fields.z, new)

@@ -185,6 +185,9 @@ class AssembledSystem:
         self._inverse: SystemInverse | None = None
         self._obstacle = (NodalObstacle(fields.nodes, fields.damage_free_nodes)
                           if forms.update == "obstacle" else None)
+        self.lower: ngs.GridFunction | None = None
+        """The obstacle's bound when it is not z_old (``coupling = "alternate"``: the step's
+        z^{k-1} while z_old is the last pass's z); None: z_old."""
 
     @property
     def matrix(self) -> Any:
@@ -283,7 +286,8 @@ class AssembledSystem:
     def _solve_obstacle(self, z_trial: ngs.GridFunction) -> int:
         """The sub-step as min of its quadratic energy over z >= z_old at the nodes
         (:mod:`ngfrac.solve.obstacle`); the minimizer goes to ``z_trial``."""
-        solution = self._obstacle.solve(self.a_z.mat, self.rhs, self.fields.z, z_trial)
+        lower = self.fields.z if self.lower is None else self.lower
+        solution = self._obstacle.solve(self.a_z.mat, self.rhs, lower, z_trial)
         if not solution.converged:
             self.context.timer.add("z: unsettled active sets", 0.0)
         return solution.iterations

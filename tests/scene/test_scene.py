@@ -90,6 +90,19 @@ def test_concurrent_substeps_need_the_papers_coupling_and_no_threaded_solves():
     bad(data, r"discretization.concurrent_substeps = True .*threaded_solves = true excludes it")
 
 
+@pytest.mark.parametrize("change, match", [
+    ({"coupling": "iterated"}, r"discretization.coupling = 'iterated' .*'alternate'"),
+    ({"coupling": "alternate", "alternate_tolerance": 0.0},
+     r"discretization.alternate_tolerance = 0.0 .*must be > 0"),
+    ({"coupling": "alternate", "alternate_passes": 0},
+     r"discretization.alternate_passes = 0 .*must be an integer >= 1"),
+])
+def test_bad_alternate_coupling_is_one_line(change, match):
+    data = demo_data()
+    data.setdefault("discretization", {}).update(change)
+    bad(data, match)
+
+
 def test_gamma_negative_constant():
     data = demo_data()
     data["material"]["gamma"] = -1.0
