@@ -323,9 +323,9 @@ class Discretization(Section):
     ``coupling = "paper"`` solves z with the previous u (the paper's eq. 7);
     ``"staggered"`` uses the u just computed; ``"alternate"`` repeats the staggered u- and
     z-sub-steps within the step, each pass from the last one's fields, until a pass changes z
-    at no node by more than ``alternate_tolerance`` (at most ``alternate_passes`` passes; the
-    passes' z_old is the last pass's z, so z never decreases between passes and, with
-    alpha2 > 0, the viscous term vanishes at the fixed point). ``z_update = "projection"`` is the paper's
+    at no node by more than ``alternate_tolerance`` (at most ``alternate_passes`` passes;
+    each pass's z-step is linearized at the last pass's z, its z_old, so with alpha2 > 0 the
+    viscous term vanishes at the fixed point, and bounded below by the step's z^{k-1}). ``z_update = "projection"`` is the paper's
     ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
     that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
     search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
