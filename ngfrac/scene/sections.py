@@ -325,11 +325,11 @@ class Discretization(Section):
     z-sub-steps within the step, each pass from the last one's fields, until a pass changes z
     at no node by more than ``alternate_tolerance`` (at most ``alternate_passes`` passes;
     each pass's z-step is linearized at the last pass's z, its z_old, so with alpha2 > 0 the
-    viscous term vanishes at the fixed point, and bounded below by the step's z^{k-1}). ``z_update = "projection"`` is the paper's
-    ``z = min(1, max(z_trial, z_old))`` at the nodes; ``"descent"`` moves from z_old towards
-    that projection only as far as the z-step's quadratic energy keeps decreasing (exact line
-    search, never worse than z_old), which with ``coupling = "staggered"`` makes every step
-    an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
+    viscous term vanishes at the fixed point, and bounded below by the step's z^{k-1}).
+    ``z_update = "projection"`` is the paper's ``z = min(1, max(z_trial, z_old))`` at the
+    nodes; ``"descent"`` moves from z_old towards that projection only as far as the
+    z-step's quadratic energy keeps decreasing (exact line search, never worse than z_old),
+    which with ``coupling = "staggered"`` makes every step an energy descent; ``"obstacle"`` minimizes the z-step's energy under ``z >= z_old``
     (an active-set method); ``"auto"`` (the default) is the crack model's choice:
     ``"projection"`` for AT2 and ``"obstacle"`` for AT1. ``threaded_solves = false`` (the
     default) runs factorizations and solves outside NGSolve's TaskManager so that a run is
