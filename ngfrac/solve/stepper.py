@@ -317,10 +317,8 @@ class PhaseFieldStepper:
                     try:
                         self.solve_u()
                     except NewtonFailure:
-                        if not self.control.halve():
+                        if not self._halved_after_newton_failure():
                             raise  # at dt already: the clear error
-                        f.u.vec.data = f.u_prev.vec  # Newton's start; z has not changed yet
-                        self.timer.add("time: halved steps (Newton failed)", 0.0)
                         solve_s += time.perf_counter() - solve_started
                         continue
                 solve_s += time.perf_counter() - solve_started
@@ -335,13 +333,10 @@ class PhaseFieldStepper:
                     old, new = self.z_problem.project()
                 if self.scene.discretization.coupling == "alternate":
                     try:
-                        new, alternate_s = self._alternate(saved_z, new - old, diagnose)
-                    except NewtonFailure:
-                        if not self.control.halve():
+                        new, alternate_s = self._alternate(saved_z, old, new, diagnose)
+                    except NewtonFailure:  # in a later pass: z has changed
+                        if not self._halved_after_newton_failure(saved_z):
                             raise
-                        f.z.vec.data = saved_z
-                        f.u.vec.data = f.u_prev.vec
-                        self.timer.add("time: halved steps (Newton failed)", 0.0)
                         continue
                     solve_s += alternate_s
                 dz_max = self.comm.max(float(np.max(new - old)) if len(new) else 0.0)
@@ -371,7 +366,19 @@ class PhaseFieldStepper:
                            dt=n * dt, step_s=time.perf_counter() - started - diagnostics_s,
                            solve_s=solve_s, adapt_s=adapt_s)
 
-    def _alternate(self, z_start: ngs.BaseVector, change: np.ndarray,
+    def _halved_after_newton_failure(self, z_start: ngs.BaseVector | None = None) -> bool:
+        """After a failed Newton u-solve: halve the step and put back Newton's start u^{k-1}
+        (and z^{k-1}, when given: a later pass's failure); False when the step is at dt
+        already (the caller re-raises)."""
+        if not self.control.halve():
+            return False
+        self.fields.u.vec.data = self.fields.u_prev.vec
+        if z_start is not None:
+            self.fields.z.vec.data = z_start
+        self.timer.add("time: halved steps (Newton failed)", 0.0)
+        return True
+
+    def _alternate(self, z_start: ngs.BaseVector, old: np.ndarray, new: np.ndarray,
                    diagnose: bool) -> tuple[np.ndarray, float]:
         """``coupling = "alternate"``: after the step's first (staggered) pass, more u- and
         z-sub-steps from the last pass's fields until a pass changes z at no node by more than
@@ -383,8 +390,8 @@ class PhaseFieldStepper:
         ----------
         z_start : ngsolve.BaseVector
             z^{k-1}, the coefficients of z at the step's start.
-        change : array
-            The first pass's change of z at the nodes.
+        old, new : array
+            z at the nodes before and after the first pass.
         diagnose : bool
             Renew the reaction forces after each u-solve (the last one's are kept).
 
@@ -393,10 +400,10 @@ class PhaseFieldStepper:
         (z at the nodes after the last pass, seconds spent in the sub-steps)
         """
         d = self.scene.discretization
-        spent, passes, new = 0.0, 1, None
-        largest = self.comm.max(float(np.max(change)) if len(change) else 0.0)
+        spent, passes = 0.0, 1
+        largest = self.comm.max(float(np.max(new - old)) if len(new) else 0.0)
         if largest <= d.alternate_tolerance or d.alternate_passes <= 1:
-            return self.nodes.values(self.fields.z), spent
+            return new, spent
         start = ngs.GridFunction(self.fields.fes_z)  # z^{k-1}, the non-repair bound of the passes
         start.vec.data = z_start
         self.z_problem.bound_by(start)
@@ -421,8 +428,6 @@ class PhaseFieldStepper:
             log.warning("step %s: %d alternate passes left z changing by %.3g (tolerance %.3g); "
                         "raise discretization.alternate_passes or lower time.dt",
                         self._step_label(), passes, largest, d.alternate_tolerance)
-        if new is None:
-            new = self.nodes.values(self.fields.z)
         return new, spent
 
     @property
