@@ -24,14 +24,16 @@ Without a split (``--set material.split='"none"' --set material.split_mode='"ful
 the paper's model) sigma:e, largest straight ahead of a mode II tip, drives z there and the
 notch grows straight ahead as a shear band.
 
-Measured (``NGFRAC_THREADS=1 python demos/sens.py``: epsilon = 0.015 mm, P2, adaptive up to
-8,000 vertices (7,733 reached), adaptive steps of 2e-5..3.2e-4 mm, 435 steps to u = 0.018 mm;
-225 s of run, 3:52 with the LEFM solution and the plots, quiet machine, load 1.0 = the run):
-peak 0.5702 kN at u = 0.01022 mm, 1.074 of Miehe et al.'s 0.531 kN (at three mesh levels
-within 0.05 %: the difference is not the mesh; docs/validation.md), 5 % below the sharp
-notch's Griffith load; the crack leaves the notch at -73.6 degrees (the ridge of z between
-epsilon and 6 epsilon; -71.0 from the tip track between 2 and 8 epsilon) and reaches the
-bottom right corner; the force at u = 0.018 mm is 0.5 % of the peak.
+Measured (``NGFRAC_THREADS=1 /usr/bin/time -v python demos/sens.py``: epsilon = 0.015 mm, P2,
+adaptive up to 8,000 vertices (7,733 reached), the staggered pass in fixed steps of 1e-5 mm,
+1,800 to u = 0.018 mm; 467 s of run, 7:53 wall and 466 s CPU in all, load ~2: another run
+beside it): peak 0.5498 kN at u = 9.19e-3 mm, 1.035 of Miehe et al.'s 0.531 kN (0.5458 at
+steps of 5e-6: the step's share is below 1 %; docs/validation.md), 9 % below the sharp
+notch's Griffith load; the crack leaves the notch at -74.4 degrees (the ridge of z between
+epsilon and 6 epsilon; -72.1 from the tip track between 2 and 8 epsilon) and reaches the
+bottom edge at the right corner; the force at u = 0.018 mm is 0.8 % of the peak. Until
+session 26 the demo ran the paper's single pass with adaptive steps (2e-5..3.2e-4 mm, 435
+steps, 225 s): 0.5702 kN at 1.022e-2 mm, 1.074 of theirs, the single pass's lag.
 """
 from __future__ import annotations
 
