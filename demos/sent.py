@@ -22,15 +22,17 @@ band's core still carries load (its first-step stiffness is 16 % above the sharp
 its peak was 7 % lower (benchmarks/scenes/sent_band.toml; docs/validation.md, "SENT without
 a split", which also has this scene at three mesh levels: within 0.24 %).
 
-Measured (``NGFRAC_THREADS=1 python demos/sent.py``: epsilon = 0.015 mm, P2, adaptive up to
-8,000 vertices (7,750 reached), adaptive steps of 1e-5..1.6e-4 mm, 303 steps to u = 7e-3 mm;
-107 s of run, 1:53 with the LEFM solution and the plots, quiet machine, load 0.2-1.0 = the
-run): the force peaks at 0.6944 kN at u = 5.57e-3 mm, 1.004 of phasefieldx's 0.6915 kN (at
-5.58e-3 mm) and 7 % above the sharp crack's Griffith load, at 22 % more displacement than
-u_c. After the peak the crack runs straight along y = 0.5 (within 0.006) and the force falls
-gradually (0.395 kN at u = 7e-3 mm with the tip at x = 0.79): z is driven by the previous
-step's displacement, so the crack advances a limited distance per step and the unstable
-growth of a quasi-static model is spread over many steps. ``adaptivity.relax_core`` keeps
+Measured (the demo's scene with ``--set output.vtk_every=0``, ``NGFRAC_THREADS=1``: epsilon =
+0.015 mm, P2, adaptive up to 8,000 vertices (7,733 reached), the staggered pass in fixed
+steps of 5e-6 mm, 1,400 to u = 7e-3 mm; 172.6 s wall, load ~2: another run beside it): the
+force peaks at 0.6787 kN at u = 5.375e-3 mm, 0.981 of phasefieldx's 0.6915 kN (at 5.58e-3
+mm; at converged steps ngfrac's peak is 0.671-0.673 kN: docs/validation.md, "SENT without a
+split") and 5 % above the sharp crack's Griffith load. After the peak the crack runs
+straight along y = 0.5 (within 0.007) to the right edge by u = 6.4e-3 mm and the force falls
+to 0.3 % of its peak. Until session 26 the demo ran the paper's single pass in adaptive
+steps (1e-5..1.6e-4 mm, 303 steps, 107 s): z driven by the previous step's displacement
+lagged the load, the peak was 0.6944 kN at 5.57e-3 mm and the crack reached only x = 0.79
+by u = 7e-3 mm. ``adaptivity.relax_core`` keeps
 the crack open through mesh changes (docs/adaptivity.md has the force jumps without it, on
 the band's scene).
 """
