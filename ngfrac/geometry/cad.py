@@ -353,6 +353,13 @@ SHAPES_3D = ("box", "cylinder", "sphere")
 OPS = ("add", "cut", "intersect")
 
 
+def _signed_area(points: Sequence[tuple[float, float]]) -> float:
+    """The shoelace area of a closed 2D polygon: positive when its corners run
+    counter-clockwise."""
+    x, y = np.asarray(points, dtype=float).T
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
 def _primitive(spec: Any) -> Any:
     """One netgen.occ shape of a scene's ``[[geometry.shapes]]`` entry."""
     from netgen import occ
@@ -370,8 +377,14 @@ def _primitive(spec: Any) -> Any:
             return plane.Direction(0, 1).Ellipse(b, a).Face()
         return plane.Ellipse(a, b).Face()
     if kind == "polygon":
-        plane = occ.WorkPlane().MoveTo(*spec.points[0])
-        for point in spec.points[1:]:
+        # counter-clockwise: a face built from a clockwise wire has a negative area, and
+        # cutting it out of a shape leaves the shape whole (OCC splits off the polygon as a
+        # second face instead, which the merge of touching faces then joins back)
+        points = [tuple(point) for point in spec.points]
+        if _signed_area(points) < 0:
+            points.reverse()
+        plane = occ.WorkPlane().MoveTo(*points[0])
+        for point in points[1:]:
             plane = plane.LineTo(*point)
         return plane.Close().Face()
     if kind == "box":

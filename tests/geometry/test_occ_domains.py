@@ -234,6 +234,8 @@ def test_scene_checks_work_through_the_occ_domain():
       {"type": "circle", "center": [0, 0], "radius": 1, "op": "intersect"}], math.pi / 4),
     ([{"type": "rectangle", "corner": [0, 0], "size": [1, 1]},   # a V-notch from the left edge
       {"type": "polygon", "points": [[0, 0.4], [0.3, 0.5], [0, 0.6]], "op": "cut"}], 1 - 0.03),
+    ([{"type": "rectangle", "corner": [0, 0], "size": [1, 1]},   # one crossing the edge, clockwise
+      {"type": "polygon", "points": [[-0.1, 0.6], [0.3, 0.5], [-0.1, 0.4]], "op": "cut"}], 1 - 0.0225),
     ([{"type": "sphere", "center": [0, 0, 0], "radius": 0.5}], math.pi / 6),
 ])
 def test_shape_types_and_ops_have_their_measure(shapes, measure):
