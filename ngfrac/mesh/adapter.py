@@ -155,6 +155,9 @@ class MeshAdapter:
         self.domain = domain_of(scene.geometry)
         self.geometry = self.domain.netgen_geometry([c.points for c in scene.cracks])
         self.last_tip: np.ndarray | None = None
+        self.notch_tip = (np.array(self.settings.notch_tip, dtype=float)
+                          if self.settings.notch_tip else None)
+        """``adaptivity.notch_tip``: where the tip disc stays while the crack has no tip."""
         self.achieved: tuple[float, float] | None = None
         self._cache: tuple[ngs.Mesh, ElementGeometry, np.ndarray] | None = None
         self.eta_total = math.nan
@@ -307,6 +310,8 @@ class MeshAdapter:
         stopped tip stays where it reached the boundary."""
         if not self.tip_stopped:
             self.last_tip = np.array(tip, dtype=float)
+            if self.notch_tip is not None and not np.all(np.isfinite(self.last_tip)):
+                self.last_tip = self.notch_tip.copy()  # a tip that leaves the disc remeshes
         self.achieved = self._band_sizes(mesh, nodes, z_values)
 
     def new_mesh(self, mesh: ngs.Mesh, nodes: LagrangeNodes, z: ngs.GridFunction,
@@ -317,7 +322,8 @@ class MeshAdapter:
             tip = self.last_tip
         eta = self.estimate(z)
         estimated = time.perf_counter()
-        sizes = self.element_sizes(mesh, nodes, z, eta, tip if np.all(np.isfinite(tip)) else None)
+        sizes = self.element_sizes(mesh, nodes, z, eta,
+                                   tip if np.all(np.isfinite(tip)) else self.notch_tip)
         marked = time.perf_counter()
         # per-dimension constants (is hmin a checked floor?): ngfrac.mesh.remesh.MeshingConstants
         new = adapt_mesh(mesh, self.geometry, sizes, hmax=self.sizes.hmax,

@@ -449,6 +449,11 @@ class Adaptivity(Section):
     estimator's equidistribution (on size levels) and the tip disc, and under the cap scales
     every size alike (the Fig. 2 demo's setting; docs/benchmarks.md, section 11, compares them).
 
+    ``notch_tip`` (a point, 2D or 3D; empty by default) is for a notch cut out of the
+    geometry instead of an initial crack: until the crack set has a tip, the tip disc
+    (``h_tip`` within ``tip_margin``) is kept at this point, so the notch's tip is resolved
+    from the first mesh on and not only once z >= 0.1 has formed on the coarse start mesh.
+
     ``initial_passes`` is how many new meshes resolve the initial cracks' profile before the
     first step (0 = by dimension: :data:`ngfrac.mesh.adapter.INITIAL_PASSES`, 3 in 2D and 2 in
     3D); a scene without initial cracks stops after the first (z0 = 0: every further pass would
@@ -470,6 +475,7 @@ class Adaptivity(Section):
     relax_core: bool = False
     size_field: str = "bands"
     initial_passes: int = 0
+    notch_tip: tuple[float, ...] = ()
 
     def validate(self) -> None:
         s = self.SECTION
@@ -486,6 +492,8 @@ class Adaptivity(Section):
             value = getattr(self, name)
             require(value >= 0, s, name, value, "must be >= 0 (0 = derived from epsilon)")
         require(self.hmax == 0 or self.hmax >= self.hmin, s, "hmax", self.hmax, "must be >= hmin")
+        require(len(self.notch_tip) in (0, 2, 3), s, "notch_tip", list(self.notch_tip),
+                "give the point as [x, y] (2D) or [x, y, z] (3D)")
 
 
 SECTIONS: dict[str, type] = {

@@ -70,6 +70,10 @@ def validate_scene(scene: "Scene") -> None:
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise SceneError(f"phase_field.damage_free: {name!r} is not a boundary of the "
                              f"geometry{hint}; boundaries are {', '.join(names)}")
+    tip = scene.adaptivity.notch_tip
+    if tip and len(tip) != scene.geometry.dim:
+        raise SceneError(f"adaptivity.notch_tip = {list(tip)!r} has {len(tip)} coordinates, but "
+                         f"the domain is {scene.geometry.dim}D; give one per axis")
     if "z" in scene.material.body_force.names and scene.geometry.dim == 2:
         raise SceneError(f"material.body_force = {scene.material.body_force.text!r} uses z, "
                          "but the domain is 2D")
