@@ -656,7 +656,9 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
         Sizes are raised to ``floor_factor * hmin`` before they go to Netgen. Where
         ``hmin_checked`` (2D) it is a floor of the delivered mesh: no element's longest edge is
         below it; the floor sent is :meth:`SizeFloor.floor` and the mesh is made again (up to
-        ``max_attempts`` times, then a warning) while it has a smaller element.
+        ``max_attempts`` times, then a warning) while it has a smaller element. If the last
+        attempt still has one, the geometry forces it (a slit narrower than hmin): the first
+        attempt's mesh is returned and the floor's ratio is left as it was before the call.
     floor : SizeFloor, optional
         The run's learned ratio (see :class:`SizeFloor`); updated with every checked mesh.
     cap_attempts : int
@@ -672,6 +674,7 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
     ngeo = _netgen_geometry(geometry)
     checked = hmin is not None and constants.hmin_checked
     requested = np.minimum(np.asarray(sizes, dtype=float), hmax)
+    ratio_before, first = floor.ratio, None
     for _ in range(max_attempts if checked else 1):
         # the sizes go to Netgen divided by the size ratio: floor them before that division
         floored = requested
@@ -685,11 +688,15 @@ def adapt_mesh(mesh: ngs.Mesh, geometry: Geometry | Domain | Any, sizes: np.ndar
         if not checked:
             return new
         smallest = float(ElementGeometry.of(new).diameters.min())
+        first = new if first is None else first
         if not floor.update(smallest, hmin):
             return new
         log.info("remesh: smallest element %.3g below hmin %.3g; Netgen floor ratio now %.3f",
                  smallest, hmin, floor.ratio)
+    # Still below hmin: a feature of the geometry (a slit narrower than hmin) forces it, and a
+    # higher floor only coarsens what was asked for. Keep the first mesh and the old ratio.
+    floor.ratio = ratio_before
     warnings.warn(f"adapt_mesh: an element of {smallest:.3g} is below hmin = {hmin:.3g} after "
                   f"{max_attempts} meshes; lower hmin or refine the geometry's small features",
                   stacklevel=2)
-    return new
+    return first
