@@ -88,7 +88,7 @@ def main(out_dir: str | Path = "out/three_hole_beam", overrides: Sequence[str] =
                                    "tips": tips, "peak_force_kN": float(force[peak]),
                                    "deflection_at_peak_mm": float(u[peak]),
                                    "final_force_kN": float(force[-1]), "epsilon": eps})
-    where = "no growth" if not hole else (f"reached the {hole} hole" if reached
+    where = "did not grow from the notch" if not hole else (f"reached the {hole} hole" if reached
                                           else f"heads for the {hole} hole")
     print(f"{scene.name}: the crack {where} (published: the {PUBLISHED} hole); peak force "
           f"{force[peak]:.4g} kN/mm at a deflection of {u[peak]:.4g} mm, {force[-1]:.4g} at the "
